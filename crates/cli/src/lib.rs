@@ -1,0 +1,8 @@
+//! The library behind the `anima` command: running a scene to frames, pictures and a summary. The
+//! xtask and the integration tests drive scenes through the same code, so what they measure is what a
+//! user runs.
+
+pub mod output;
+pub mod picture;
+pub mod experiments;
+pub mod runner;

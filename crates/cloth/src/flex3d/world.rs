@@ -1,0 +1,563 @@
+//! A FLEX3D world: every surface of a scene as one flat particle state, stepped together.
+
+use anima_geom::{Aabb, DVec3, GridFrame, PreparedTriangle, SurfaceGrid, TriangleMesh, grid_triangles};
+use anima_ode::{OdeSystem, Stepper};
+
+use super::broadphase::TriangleGrid;
+use super::desc::{
+    ContactApproach, Flex3dScene, FrictionMode, ModelOptions, StaticResponse, TranslationMode,
+};
+use super::forces::{SurfaceForces, acceleration_with_friction, add_bending_forces, add_spring_forces};
+
+/// Why a scene could not be turned into a world.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    #[error("surface `{surface}`: {message}")]
+    Surface { surface: String, message: String },
+    #[error("scene: {0}")]
+    Scene(String),
+}
+
+/// A value went non-finite: the run stops and says where.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("non-finite state at step {step} (t = {time} s): surface `{surface}`, particle ({row}, {col})")]
+pub struct NonFiniteError {
+    pub step: usize,
+    pub time: f64,
+    pub surface: String,
+    pub row: usize,
+    pub col: usize,
+}
+
+/// How many collision responses the run has applied, by partner kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CollisionCounts {
+    pub with_objects: u64,
+    pub with_surfaces: u64,
+}
+
+/// Whole-state measurements used to check rest, divergence and settling (spec F-37).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Diagnostics {
+    pub max_speed: f64,
+    pub kinetic_energy: f64,
+    pub bounds: Aabb,
+    pub all_finite: bool,
+}
+
+/// One surface's place in the world.
+#[derive(Debug, Clone)]
+pub struct SurfaceInfo {
+    pub name: String,
+    pub rows: usize,
+    pub cols: usize,
+    pub spacing: f64,
+    pub particle_mass: f64,
+    /// First particle of the surface in the world's flat arrays.
+    pub offset: usize,
+    pub grid: SurfaceGrid,
+    /// Triangles in the surface's own (0-based) particle indices.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl SurfaceInfo {
+    pub fn n_particles(&self) -> usize {
+        self.rows * self.cols
+    }
+
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.offset..self.offset + self.n_particles()
+    }
+}
+
+/// A `TRANSLAÇÃO` window in step indices: active for steps whose start index s − 1 lies in [first, end).
+#[derive(Debug, Clone, Copy)]
+struct StepWindow {
+    first: usize,
+    end: usize,
+    per_frame: DVec3,
+}
+
+/// The ODE system: forces of every surface, with pinned particles' accelerations held at zero.
+#[derive(Debug, Clone)]
+struct Model {
+    surfaces: Vec<SurfaceForces>,
+    pinned: Vec<bool>,
+    friction_mode: FrictionMode,
+    friction: f64,
+    bend_reaction: bool,
+    n: usize,
+}
+
+impl OdeSystem for Model {
+    type Coord = DVec3;
+
+    fn n_coords(&self) -> usize {
+        self.n
+    }
+
+    /// Resultant of gravity, external force, springs and angular springs, then friction (Nedel 1993 §3.2,
+    /// evaluation order of §5.6), divided by the particle mass. Pinned particles follow their prescribed
+    /// motion, so their acceleration is zero.
+    fn acceleration(&mut self, _t: f64, x: &[DVec3], v: &[DVec3], a: &mut [DVec3]) {
+        for s in &self.surfaces {
+            let r = s.offset..s.offset + s.n_particles();
+            let (xs, vs, fs) = (&x[r.clone()], &v[r.clone()], &mut a[r.clone()]);
+            fs.fill(s.body_force);
+            add_spring_forces(s, xs, fs);
+            if s.kc != [0.0; 3] {
+                add_bending_forces(s, xs, fs, self.bend_reaction);
+            }
+            let inv_mass = 1.0 / s.mass;
+            let pinned = &self.pinned[r];
+            for ((f, &vel), &pin) in fs.iter_mut().zip(vs).zip(pinned) {
+                *f = if pin {
+                    DVec3::ZERO
+                } else {
+                    acceleration_with_friction(*f, vel, inv_mass, self.friction_mode, self.friction)
+                };
+            }
+        }
+    }
+}
+
+/// Collision data: static triangles prepared once, surface triangles re-prepared from the start-of-step
+/// positions every step (spec S3.5.5, A-14).
+#[derive(Debug, Clone, Default)]
+struct Colliders {
+    n_static: usize,
+    /// Static triangles first, then every surface's triangles in world particle indices.
+    prepared: Vec<PreparedTriangle>,
+    boxes: Vec<Aabb>,
+    /// Particles of each triangle; `u32::MAX` for the corners of static triangles.
+    corners: Vec<[u32; 3]>,
+    grid: TriangleGrid,
+}
+
+/// All surfaces of a FLEX3D scene and the static objects they collide with.
+#[derive(Debug)]
+pub struct Flex3dWorld {
+    model: Model,
+    stepper: Stepper<DVec3>,
+    x: Vec<DVec3>,
+    v: Vec<DVec3>,
+    x_new: Vec<DVec3>,
+    v_new: Vec<DVec3>,
+    mass: Vec<f64>,
+    surfaces: Vec<SurfaceInfo>,
+    pinned_of_surface: Vec<Vec<usize>>,
+    windows: Vec<Vec<StepWindow>>,
+    objects: Vec<TriangleMesh>,
+    colliders: Colliders,
+    options: ModelOptions,
+    dt: f64,
+    frame_rate: f64,
+    steps_per_frame: usize,
+    step: usize,
+    counts: CollisionCounts,
+}
+
+impl Flex3dWorld {
+    /// Builds the flat surfaces of `scene` (spec S2.3, S5.7) with zero velocity, and the static
+    /// colliders from `objects` (the meshes of `scene.objects`, in order).
+    pub fn new(scene: &Flex3dScene, objects: Vec<TriangleMesh>) -> Result<Self, BuildError> {
+        let bad = |m: &str| BuildError::Scene(m.to_owned());
+        if !(scene.dt_s > 0.0 && scene.dt_s.is_finite()) {
+            return Err(bad("the time step must be positive"));
+        }
+        if !(scene.frame_rate_hz > 0.0 && scene.frame_rate_hz.is_finite()) {
+            return Err(bad("the frame rate must be positive"));
+        }
+        if !(scene.gravity_m_s2.is_finite() && scene.external_force_n.is_finite()) {
+            return Err(bad("gravity and external force must be finite"));
+        }
+        let opts = scene.options;
+        let mut surfaces = Vec::new();
+        let mut forces = Vec::new();
+        let mut pinned_of_surface = Vec::new();
+        let mut windows = Vec::new();
+        let (mut x, mut mass, mut pinned) = (Vec::new(), Vec::new(), Vec::new());
+        for s in &scene.surfaces {
+            let err = |message: String| BuildError::Surface { surface: s.name.clone(), message };
+            if s.rows < 2 || s.cols < 2 {
+                return Err(err(format!("mesh must be at least 2×2, got {}×{}", s.rows, s.cols)));
+            }
+            if !(s.spacing_m > 0.0 && s.particle_mass_kg > 0.0) {
+                return Err(err("spacing and particle mass must be positive".into()));
+            }
+            let frame = GridFrame::from_normal(s.centre_m, s.normal, opts.row_direction)
+                .ok_or_else(|| err("the normal must be a non-zero finite vector".into()))?;
+            let grid = SurfaceGrid { rows: s.rows, cols: s.cols, spacing: s.spacing_m, frame };
+            let offset = x.len();
+            x.extend(grid.positions());
+            mass.extend(std::iter::repeat_n(s.particle_mass_kg, grid.n_particles()));
+            pinned.extend(std::iter::repeat_n(false, grid.n_particles()));
+            let mut pins = Vec::new();
+            for &(i, j) in &s.fixed {
+                if i >= s.rows || j >= s.cols {
+                    return Err(err(format!("fixed point ({i}, {j}) is outside the {}×{} mesh", s.rows, s.cols)));
+                }
+                let p = offset + grid.index(i, j);
+                if !pinned[p] {
+                    pinned[p] = true;
+                    pins.push(p);
+                }
+            }
+            pinned_of_surface.push(pins);
+            windows.push(
+                s.translations
+                    .iter()
+                    .map(|t| StepWindow {
+                        first: (t.start_s / scene.dt_s).round().max(0.0) as usize,
+                        end: (t.end_s / scene.dt_s).round().max(0.0) as usize,
+                        per_frame: t.per_frame_m,
+                    })
+                    .collect(),
+            );
+            let m = s.particle_mass_kg;
+            let ext = if opts.external_force_is_acceleration { scene.external_force_n * m } else { scene.external_force_n };
+            forces.push(SurfaceForces {
+                offset,
+                rows: s.rows,
+                cols: s.cols,
+                spacing: s.spacing_m,
+                mass: m,
+                k: s.stiffness_n_m,
+                kc: s.bending_n_m,
+                body_force: scene.gravity_m_s2 * m + ext,
+            });
+            surfaces.push(SurfaceInfo {
+                name: s.name.clone(),
+                rows: s.rows,
+                cols: s.cols,
+                spacing: s.spacing_m,
+                particle_mass: m,
+                offset,
+                grid,
+                triangles: grid_triangles(s.rows, s.cols),
+            });
+        }
+        let n = x.len();
+        let model = Model {
+            surfaces: forces,
+            pinned,
+            friction_mode: scene.friction.mode,
+            friction: scene.friction.coefficient,
+            bend_reaction: opts.bend_reaction,
+            n,
+        };
+        let mut colliders = Colliders::default();
+        if opts.collisions {
+            for mesh in &objects {
+                for t in 0..mesh.n_triangles() {
+                    let c = mesh.corners(t);
+                    colliders.prepared.push(PreparedTriangle::new(c));
+                    colliders.boxes.push(Aabb::from_points(c));
+                    colliders.corners.push([u32::MAX; 3]);
+                }
+            }
+            colliders.n_static = colliders.prepared.len();
+            for s in &surfaces {
+                for t in &s.triangles {
+                    colliders.corners.push(t.map(|i| i + s.offset as u32));
+                }
+            }
+            colliders.prepared.resize(colliders.corners.len(), PreparedTriangle::new([DVec3::ZERO; 3]));
+            colliders.boxes.resize(colliders.corners.len(), Aabb::EMPTY);
+        }
+        Ok(Self {
+            stepper: Stepper::new(scene.integrator, n),
+            model,
+            v: vec![DVec3::ZERO; n],
+            x_new: x.clone(),
+            v_new: vec![DVec3::ZERO; n],
+            x,
+            mass,
+            surfaces,
+            pinned_of_surface,
+            windows,
+            objects,
+            colliders,
+            options: opts,
+            dt: scene.dt_s,
+            frame_rate: scene.frame_rate_hz,
+            steps_per_frame: (1.0 / (scene.frame_rate_hz * scene.dt_s)).round().max(1.0) as usize,
+            step: 0,
+            counts: CollisionCounts::default(),
+        })
+    }
+
+    /// Time at the current state: steps taken × Δt (counted, never accumulated).
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+
+    pub fn steps_taken(&self) -> usize {
+        self.step
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    pub fn surfaces(&self) -> &[SurfaceInfo] {
+        &self.surfaces
+    }
+
+    pub fn objects(&self) -> &[TriangleMesh] {
+        &self.objects
+    }
+
+    /// Positions of every particle of every surface, surface after surface, row-major.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.x
+    }
+
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.v
+    }
+
+    pub fn surface_positions(&self, surface: usize) -> &[DVec3] {
+        &self.x[self.surfaces[surface].range()]
+    }
+
+    pub fn is_pinned(&self, particle: usize) -> bool {
+        self.model.pinned[particle]
+    }
+
+    pub fn collision_counts(&self) -> CollisionCounts {
+        self.counts
+    }
+
+    /// Advances one step of Δt with the scene's integrator: tentative state from the integrator, then
+    /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4).
+    pub fn step(&mut self) -> Result<(), NonFiniteError> {
+        let t = self.time();
+        self.stepper.step(&mut self.model, t, self.dt, &self.x, &self.v, &mut self.x_new, &mut self.v_new);
+        self.apply_constraints();
+        if self.options.collisions && !self.colliders.corners.is_empty() {
+            self.collide();
+        }
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        std::mem::swap(&mut self.v, &mut self.v_new);
+        self.step += 1;
+        self.check_finite()
+    }
+
+    /// Pinned particles: x̃ = x + u·Δt, ṽ = u with u the sum of active translation velocities (spec S3.6).
+    /// This runs before the collision pass so that a pinned collision partner already moves with its
+    /// prescribed velocity; collisions never change a pinned particle.
+    fn apply_constraints(&mut self) {
+        let s0 = self.step; // the step starting at t = s0·Δt
+        for (pins, windows) in self.pinned_of_surface.iter().zip(&self.windows) {
+            let mut u = DVec3::ZERO;
+            let mut jump = DVec3::ZERO;
+            for w in windows.iter().filter(|w| w.first <= s0 && s0 < w.end) {
+                match self.options.translation {
+                    TranslationMode::Continuous => u += w.per_frame * self.frame_rate,
+                    TranslationMode::PerFrameJump => {
+                        if s0 % self.steps_per_frame == 0 {
+                            jump += w.per_frame;
+                        }
+                    }
+                }
+            }
+            for &p in pins {
+                self.x_new[p] = self.x[p] + u * self.dt + jump;
+                self.v_new[p] = u;
+            }
+        }
+    }
+
+    /// The collision pass of spec S3.5.5 over all free particles in a fixed order (surface order, then
+    /// row-major). Each path x → x̃ is tested against every triangle that does not contain the particle,
+    /// static objects and surfaces alike (surfaces at their start-of-step positions); the first hit
+    /// (smallest segment parameter, then lowest triangle index) is answered with a 1-D elastic impact, and
+    /// the particle stays where it was at the start of the step.
+    fn collide(&mut self) {
+        let Self { colliders, x, x_new, v_new, model, mass, options, counts, .. } = self;
+        let Colliders { n_static, prepared, boxes, corners, grid } = colliders;
+        let n_static = *n_static;
+        for t in n_static..corners.len() {
+            let tri = corners[t].map(|i| x[i as usize]);
+            prepared[t] = PreparedTriangle::new(tri);
+            boxes[t] = Aabb::from_points(tri);
+        }
+        grid.rebuild(boxes);
+        let pinned = &model.pinned;
+        for p in 0..x.len() {
+            if pinned[p] {
+                continue;
+            }
+            let o = x[p];
+            let dir = x_new[p] - o;
+            if dir == DVec3::ZERO {
+                continue;
+            }
+            let seg = Aabb::from_points([o, x_new[p]]);
+            let mut best: Option<(f64, usize, [f64; 3])> = None;
+            grid.query(&seg, |t| {
+                if !seg.overlaps(&boxes[t]) || corners[t].contains(&(p as u32)) {
+                    return;
+                }
+                if let Some(hit) = anima_geom::segment_triangle(o, dir, &prepared[t]) {
+                    let better = match best {
+                        None => true,
+                        Some((s, bt, _)) => hit.s < s || (hit.s == s && t < bt),
+                    };
+                    if better {
+                        best = Some((hit.s, t, hit.barycentric));
+                    }
+                }
+            });
+            let Some((_, t, bary)) = best else { continue };
+            let v_tilde = v_new[p];
+            if t < n_static {
+                v_new[p] = match options.static_response {
+                    StaticResponse::Reverse => -v_tilde,
+                    StaticResponse::ReflectNormal => {
+                        let n = prepared[t].unit_normal();
+                        v_tilde - n * (2.0 * v_tilde.dot(n))
+                    }
+                };
+                counts.with_objects += 1;
+            } else {
+                let tri = corners[t].map(|i| i as usize);
+                match options.contact {
+                    ContactApproach::NearestVertex => {
+                        let k = if bary[0] >= bary[1] && bary[0] >= bary[2] {
+                            0
+                        } else if bary[1] >= bary[2] {
+                            1
+                        } else {
+                            2
+                        };
+                        let q = tri[k];
+                        if pinned[q] {
+                            // An immovable partner moving with its prescribed velocity u: v ← 2u − ṽ.
+                            v_new[p] = v_new[q] * 2.0 - v_tilde;
+                        } else {
+                            let (vp, vq) = elastic_1d(mass[p], v_tilde, mass[q], v_new[q]);
+                            v_new[p] = vp;
+                            v_new[q] = vq;
+                        }
+                    }
+                    ContactApproach::ThreeVertices => {
+                        let mean = (v_new[tri[0]] + v_new[tri[1]] + v_new[tri[2]]) * (1.0 / 3.0);
+                        if tri.iter().any(|&q| pinned[q]) {
+                            v_new[p] = mean * 2.0 - v_tilde;
+                        } else {
+                            let body_mass = mass[tri[0]] + mass[tri[1]] + mass[tri[2]];
+                            let (vp, vb) = elastic_1d(mass[p], v_tilde, body_mass, mean);
+                            v_new[p] = vp;
+                            for q in tri {
+                                v_new[q] += vb - mean;
+                            }
+                        }
+                    }
+                }
+                counts.with_surfaces += 1;
+            }
+            x_new[p] = o;
+        }
+    }
+
+    /// Steps until `steps_taken() == target` (no-op if already there or past it).
+    pub fn run_to_step(&mut self, target: usize) -> Result<(), NonFiniteError> {
+        while self.step < target {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    fn check_finite(&self) -> Result<(), NonFiniteError> {
+        let bad = self.x.iter().zip(&self.v).position(|(x, v)| !(x.is_finite() && v.is_finite()));
+        let Some(p) = bad else { return Ok(()) };
+        let s = self.surfaces.iter().find(|s| s.range().contains(&p)).expect("every particle has a surface");
+        let local = p - s.offset;
+        Err(NonFiniteError {
+            step: self.step,
+            time: self.time(),
+            surface: s.name.clone(),
+            row: local / s.cols,
+            col: local % s.cols,
+        })
+    }
+
+    /// Maximum speed, kinetic energy Σ ½ m |v|², bounding box, finiteness (spec F-37).
+    pub fn diagnostics(&self) -> Diagnostics {
+        let mut max_speed = 0.0f64;
+        let mut kinetic_energy = 0.0;
+        for (v, m) in self.v.iter().zip(&self.mass) {
+            let s2 = v.length_squared();
+            max_speed = max_speed.max(s2.sqrt());
+            kinetic_energy += 0.5 * m * s2;
+        }
+        let all_finite = self.x.iter().chain(&self.v).all(|p| p.is_finite());
+        Diagnostics { max_speed, kinetic_energy, bounds: Aabb::from_points(self.x.iter().copied()), all_finite }
+    }
+
+    /// Particles that lie inside a static object (a closed mesh) now.
+    pub fn penetrations(&self) -> usize {
+        let boxes: Vec<Aabb> = self.objects.iter().map(|o| o.aabb()).collect();
+        self.x
+            .iter()
+            .filter(|&&p| self.objects.iter().zip(&boxes).any(|(o, b)| b.overlaps(&Aabb::from_points([p])) && o.contains_point(p)))
+            .count()
+    }
+
+    /// Largest relative spring strain |L − L0|/L0 over the structural and diagonal springs.
+    pub fn max_strain(&self) -> f64 {
+        let mut worst = 0.0f64;
+        for s in &self.surfaces {
+            let x = &self.x[s.range()];
+            let (m, n, r) = (s.rows, s.cols, s.spacing);
+            let rd = r * std::f64::consts::SQRT_2;
+            let mut check = |p: usize, q: usize, l0: f64| worst = worst.max(((x[p] - x[q]).length() - l0).abs() / l0);
+            for i in 0..m {
+                for j in 0..n {
+                    let p = i * n + j;
+                    if j + 1 < n {
+                        check(p, p + 1, r);
+                    }
+                    if i + 1 < m {
+                        check(p, p + n, r);
+                        if j + 1 < n {
+                            check(p, p + n + 1, rd);
+                        }
+                        if j > 0 {
+                            check(p, p + n - 1, rd);
+                        }
+                    }
+                }
+            }
+        }
+        worst
+    }
+}
+
+/// Velocities after a 1-D perfectly elastic impact (Nedel 1993 Eqs. 3.2–3.6), applied to each component:
+/// v1f = ((m1 − m2) v1 + 2 m2 v2)/(m1 + m2), v2f = (2 m1 v1 + (m2 − m1) v2)/(m1 + m2). Equal masses swap
+/// velocities exactly.
+fn elastic_1d(m1: f64, v1: DVec3, m2: f64, v2: DVec3) -> (DVec3, DVec3) {
+    if m1 == m2 {
+        return (v2, v1);
+    }
+    let total = m1 + m2;
+    ((v1 * (m1 - m2) + v2 * (2.0 * m2)) / total, (v1 * (2.0 * m1) + v2 * (m2 - m1)) / total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn elastic_impact_conserves_momentum_and_energy() {
+        let (v1, v2) = (DVec3::new(1.0, -2.0, 0.5), DVec3::new(-0.5, 0.0, 2.0));
+        let (a, b) = elastic_1d(2.0, v1, 3.0, v2);
+        assert!((v1 * 2.0 + v2 * 3.0 - (a * 2.0 + b * 3.0)).length() < 1e-12);
+        let e = |x: DVec3, y: DVec3| 2.0 * x.length_squared() + 3.0 * y.length_squared();
+        assert!((e(v1, v2) - e(a, b)).abs() < 1e-12);
+        assert_eq!(elastic_1d(1.0, v1, 1.0, v2), (v2, v1));
+    }
+}

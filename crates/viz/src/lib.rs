@@ -1,0 +1,30 @@
+//! Pictures for anima: a small flat-shading software rasteriser for triangle meshes, line plots of
+//! series, and an RGB [`Image`] that can be labelled, tiled into figure sheets and written as PNG.
+//!
+//! This crate knows no physics: it draws vertices, triangles and (x, y) points handed to it, whatever
+//! they came from. It does no file I/O of its own: writers take `impl Write`. Everything is drawn in
+//! software with an embedded font (DejaVu Sans), so pictures come out the same on a machine without a
+//! GPU, a display or system fonts.
+//!
+//! - [`render`] draws [`RenderMesh`]es seen by a [`Camera`] with z-buffered, two-sided flat shading
+//!   (cloth has no inside), optional edge lines, and a sky-and-ground background.
+//! - [`LinePlot`] draws [`Series`] with plotters: legend, linear or log axes, clipping to given ranges.
+//! - [`Image::grid`] tiles frames into a sheet; [`Image::label`] writes text on a picture.
+
+mod camera;
+mod error;
+mod image;
+mod plot;
+mod raster;
+mod render;
+mod text;
+
+#[cfg(test)]
+mod preview;
+
+pub use anima_geom::{Aabb, DVec3};
+pub use camera::{Camera, Projection};
+pub use error::VizError;
+pub use image::Image;
+pub use plot::{LegendPosition, LinePlot, PALETTE, Series, SeriesStyle};
+pub use render::{Background, RenderMesh, RenderSettings, render};
