@@ -1,1 +1,4 @@
+//! anima's integration tests: one binary, one module per subject.
 
+mod flex3d_experiments;
+mod flex3d_scenes;

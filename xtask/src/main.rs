@@ -1,1 +1,43 @@
-fn main() {}
+//! `cargo xtask`: reproduce the thesis experiments beside the thesis's own numbers and regenerate every
+//! figure in `docs/figures/`.
+
+mod figures;
+mod reproduce;
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(name = "xtask", about = "anima project tasks")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Re-run a thesis experiment and print the thesis's numbers beside ours:
+    /// table-4-1, e-2 … e-8, or all (which also writes docs/reproduction/flex3d-results.md).
+    Reproduce {
+        experiment: String,
+        /// Friction reading for the scene experiments: literal (default) or viscous.
+        #[arg(long, default_value = "literal")]
+        friction: String,
+    },
+    /// Regenerate every reference plot and figure scene into docs/figures/.
+    Figures,
+}
+
+/// The repository root (xtask lives one folder below it).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn main() -> Result<()> {
+    match Cli::parse().command {
+        Command::Reproduce { experiment, friction } => reproduce::run(&experiment, &friction),
+        Command::Figures => figures::run(),
+    }
+}

@@ -85,9 +85,21 @@ impl ThesisScene {
         }
     }
 
+    /// Where pictures of the scene look from: the sheets that leave their plane (+z) are seen from the
+    /// side so that the motion out of the plane shows.
+    pub fn view_dir(self) -> DVec3 {
+        match self {
+            ThesisScene::Paper | ThesisScene::Cardboard | ThesisScene::Wind => DVec3::new(-1.0, -0.35, -0.55),
+            _ => crate::picture::VIEW_DIR,
+        }
+    }
+
     /// Loads the script with the thesis's gravity.
     pub fn load(self) -> Result<LoadedScene> {
-        Ok(anima_scene::load(&flex3d_assets().join(self.script()), &LoadOptions { gravity: Some(self.gravity()) })?)
+        Ok(anima_scene::load(
+            &flex3d_assets().join(self.script()),
+            &LoadOptions { gravity: Some(self.gravity()) },
+        )?)
     }
 
     /// A fresh world of the scene.
@@ -118,7 +130,10 @@ pub struct Table41 {
 
 pub fn e1_table_4_1(integrator: Integrator) -> Table41 {
     let ours = table_4_1(integrator);
-    let matches = (0..11).flat_map(|t| (0..6).map(move |c| (t, c))).filter(|&(t, c)| ours[t][c] == TABLE_4_1_THESIS[t][c]).count();
+    let matches = (0..11)
+        .flat_map(|t| (0..6).map(move |c| (t, c)))
+        .filter(|&(t, c)| ours[t][c] == TABLE_4_1_THESIS[t][c])
+        .count();
     Table41 { ours, thesis: TABLE_4_1_THESIS, steps: TABLE_4_1_STEPS, matches }
 }
 
@@ -273,21 +288,31 @@ pub struct E5Wind {
     /// Whether particle (9, 9), the free corner, has the largest z at each frame.
     pub free_corner_furthest: Vec<bool>,
     pub min_z: Vec<f64>,
+    /// Self-collision responses up to each frame.
+    pub surface_hits: Vec<u64>,
     pub max_speed_last: f64,
 }
 
-pub fn e5_wind() -> Result<E5Wind> {
-    let (loaded, mut world) = ThesisScene::Wind.world(|_| {})?;
+pub fn e5_wind(collisions: bool) -> Result<E5Wind> {
+    let (loaded, mut world) = ThesisScene::Wind.world(|l| l.scene.options.collisions = collisions)?;
     let info = world.surfaces()[0].clone();
     let corner = info.grid.index(9, 9);
-    let mut out = E5Wind { z_extent: vec![], free_corner_furthest: vec![], min_z: vec![], max_speed_last: 0.0 };
+    let mut out = E5Wind {
+        z_extent: vec![],
+        free_corner_furthest: vec![],
+        min_z: vec![],
+        surface_hits: vec![],
+        max_speed_last: 0.0,
+    };
     for k in 1..=loaded.scene.n_frames() {
         run_to_frame(&loaded, &mut world, k)?;
         let x = world.surface_positions(0);
-        let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.z), h.max(p.z)));
+        let (lo, hi) =
+            x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.z), h.max(p.z)));
         out.z_extent.push(hi - lo);
         out.min_z.push(lo);
         out.free_corner_furthest.push(x[corner].z == hi);
+        out.surface_hits.push(world.collision_counts().with_surfaces);
     }
     out.max_speed_last = world.diagnostics().max_speed;
     Ok(out)
@@ -308,6 +333,8 @@ pub struct E6Theatre {
     pub collisions_with_surfaces: u64,
     pub max_speed: Vec<f64>,
     pub max_out_of_plane: f64,
+    /// Largest particle distance at frame 145 from the settled state of frame 25.
+    pub distance_from_hanging: f64,
 }
 
 pub fn e6_theatre() -> Result<E6Theatre> {
@@ -321,15 +348,20 @@ pub fn e6_theatre() -> Result<E6Theatre> {
     let mut closed = [0.0; 2];
     let mut max_speed = Vec::new();
     let mut max_out_of_plane = 0.0f64;
+    let mut hanging = Vec::new();
     for k in 1..=loaded.scene.n_frames() {
         run_to_frame(&loaded, &mut world, k)?;
+        if k == 25 {
+            hanging = world.positions().to_vec();
+        }
         if k <= 25 {
             run_to_frame(&c_loaded, &mut curtain, k)?;
             matches &= world.surface_positions(0) == curtain.surface_positions(0);
         }
         if k == 78 {
             for c in 0..2 {
-                closed[c] = top[c].iter().map(|&p| (world.positions()[p].x - start[p].x).abs()).fold(0.0, f64::max);
+                closed[c] =
+                    top[c].iter().map(|&p| (world.positions()[p].x - start[p].x).abs()).fold(0.0, f64::max);
             }
         }
         max_speed.push(world.diagnostics().max_speed);
@@ -351,6 +383,12 @@ pub fn e6_theatre() -> Result<E6Theatre> {
         collisions_with_surfaces: world.collision_counts().with_surfaces,
         max_speed,
         max_out_of_plane,
+        distance_from_hanging: world
+            .positions()
+            .iter()
+            .zip(&hanging)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max),
     })
 }
 
@@ -391,7 +429,12 @@ pub fn e8_tablecloth(friction: FrictionMode) -> Result<E8Tablecloth> {
         + x[info.grid.index(m / 2 - 1, n / 2)].y
         + x[info.grid.index(m / 2, n / 2 - 1)].y)
         / 4.0;
-    let corners = [info.grid.index(0, 0), info.grid.index(0, n - 1), info.grid.index(m - 1, 0), info.grid.index(m - 1, n - 1)];
+    let corners = [
+        info.grid.index(0, 0),
+        info.grid.index(0, n - 1),
+        info.grid.index(m - 1, 0),
+        info.grid.index(m - 1, n - 1),
+    ];
     Ok(E8Tablecloth {
         first_contact_time,
         penetrations_total,

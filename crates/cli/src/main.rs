@@ -120,7 +120,11 @@ fn load_default() -> Result<LoadedScene> {
     let table = anima_geom::obt::read_obt(DEFAULT_TABLE.as_bytes(), anima_geom::obt::IndexBase::Auto)
         .context("the built-in table")?
         .to_mesh()?;
-    Ok(LoadedScene { scene, objects: vec![("mesa.obt".into(), table)], path: PathBuf::from("built-in tablecloth") })
+    Ok(LoadedScene {
+        scene,
+        objects: vec![("mesa.obt".into(), table)],
+        path: PathBuf::from("built-in tablecloth"),
+    })
 }
 
 fn run_command(args: RunArgs) -> Result<ExitCode> {
@@ -225,12 +229,13 @@ fn convert_command(input: &Path, output: Option<PathBuf>, gravity: Option<DVec3>
     Ok(())
 }
 
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run_command(args),
-        Command::Convert { input, output, gravity } => convert_command(&input, output, gravity).map(|()| ExitCode::SUCCESS),
+        Command::Convert { input, output, gravity } => {
+            convert_command(&input, output, gravity).map(|()| ExitCode::SUCCESS)
+        }
     };
     match result {
         Ok(code) => code,

@@ -20,7 +20,12 @@ pub const VIEW_DIR: DVec3 = DVec3::new(-0.45, -0.45, -1.0);
 
 /// A camera that frames `bounds` from [`VIEW_DIR`] with y up.
 pub fn camera_for(bounds: Aabb) -> Camera {
-    Camera::framing(bounds, VIEW_DIR, DVec3::Y, 35.0)
+    camera_along(bounds, VIEW_DIR)
+}
+
+/// A camera that frames `bounds` looking along `view_dir`, with y up.
+pub fn camera_along(bounds: Aabb, view_dir: DVec3) -> Camera {
+    Camera::framing(bounds, view_dir, DVec3::Y, 35.0)
 }
 
 /// Bounds of the given particle states and the static objects.
@@ -42,9 +47,11 @@ pub fn render_state(
     height: u32,
     edges: bool,
 ) -> Result<Image> {
-    let mut meshes: Vec<RenderMesh> = objects.iter().map(|o| RenderMesh::from_mesh(o, OBJECT_COLOUR)).collect();
+    let mut meshes: Vec<RenderMesh> =
+        objects.iter().map(|o| RenderMesh::from_mesh(o, OBJECT_COLOUR)).collect();
     for (k, s) in surfaces.iter().enumerate() {
-        let mesh = RenderMesh::new(&positions[s.range()], &s.triangles, SURFACE_COLOURS[k % SURFACE_COLOURS.len()]);
+        let mesh =
+            RenderMesh::new(&positions[s.range()], &s.triangles, SURFACE_COLOURS[k % SURFACE_COLOURS.len()]);
         meshes.push(if edges { mesh.with_edges() } else { mesh });
     }
     Ok(render(&meshes, camera, &RenderSettings::new(width, height))?)
@@ -70,12 +77,21 @@ pub fn write_pictures(dir: &Path, world: &Flex3dWorld, snapshots: &[Snapshot]) -
         world.objects(),
     );
     let camera = camera_for(bounds);
-    let last = labelled_frame(world, world.positions(), &camera, (960, 720), &format!("t = {:.2} s", world.time()))?;
+    let last =
+        labelled_frame(world, world.positions(), &camera, (960, 720), &format!("t = {:.2} s", world.time()))?;
     write_atomic(&dir.join("final.png"), |w| Ok(last.write_png(w)?))?;
     if !snapshots.is_empty() {
         let tiles = snapshots
             .iter()
-            .map(|s| labelled_frame(world, &s.positions, &camera, (400, 300), &format!("frame {} (t = {:.1} s)", s.frame, s.time)))
+            .map(|s| {
+                labelled_frame(
+                    world,
+                    &s.positions,
+                    &camera,
+                    (400, 300),
+                    &format!("frame {} (t = {:.1} s)", s.frame, s.time),
+                )
+            })
             .collect::<Result<Vec<_>>>()?;
         let sheet = Image::grid(&tiles, 3, 4, [255, 255, 255])?;
         write_atomic(&dir.join("frames.png"), |w| Ok(sheet.write_png(w)?))?;

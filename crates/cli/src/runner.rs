@@ -188,7 +188,11 @@ pub fn run(
     Ok(RunOutcome { summary, world, snapshots })
 }
 
-fn step_to(world: &mut Flex3dWorld, target: usize, bar: Option<&indicatif::ProgressBar>) -> Result<(), NonFiniteError> {
+fn step_to(
+    world: &mut Flex3dWorld,
+    target: usize,
+    bar: Option<&indicatif::ProgressBar>,
+) -> Result<(), NonFiniteError> {
     // Update the bar in chunks so that it costs nothing measurable.
     const CHUNK: usize = 1000;
     while world.steps_taken() < target {
@@ -204,8 +208,10 @@ fn step_to(world: &mut Flex3dWorld, target: usize, bar: Option<&indicatif::Progr
 fn progress_bar(steps: u64) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(steps);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} steps ({eta} left)")
-            .expect("valid template"),
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} steps ({eta} left)",
+        )
+        .expect("valid template"),
     );
     bar
 }
@@ -232,8 +238,6 @@ pub fn write_summary(path: &std::path::Path, summary: &RunSummary) -> Result<()>
         Ok(())
     })
 }
-
-
 
 #[cfg(test)]
 mod tests {

@@ -2,7 +2,7 @@
 //! top row pinned), forward Euler, with and without the collision pass.
 
 use anima_cloth::flex3d::{
-    Flex3dScene, Flex3dWorld, Friction, FrictionMode, ModelOptions, SurfaceDesc, FLEX3D_GRAVITY,
+    FLEX3D_GRAVITY, Flex3dScene, Flex3dWorld, Friction, FrictionMode, ModelOptions, SurfaceDesc,
 };
 use anima_geom::DVec3;
 use anima_ode::Integrator;

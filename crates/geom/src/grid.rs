@@ -104,7 +104,8 @@ mod tests {
     #[test]
     fn curtain_spans_the_spec_worked_example() {
         // Spec S2.3: 20×20, r = 1.85, C = (−55, 40, 20), normal +z → x ∈ [−72.575, −37.425], y ∈ [22.425, 57.575].
-        let frame = GridFrame::from_normal(DVec3::new(-55.0, 40.0, 20.0), DVec3::Z, RowDirection::Down).unwrap();
+        let frame =
+            GridFrame::from_normal(DVec3::new(-55.0, 40.0, 20.0), DVec3::Z, RowDirection::Down).unwrap();
         let g = SurfaceGrid { rows: 20, cols: 20, spacing: 1.85, frame };
         let p = g.positions();
         let first = p[g.index(0, 0)];
@@ -115,7 +116,8 @@ mod tests {
 
     #[test]
     fn horizontal_sheet_has_rows_along_z() {
-        let frame = GridFrame::from_normal(DVec3::new(0.0, 15.0, -1.0), DVec3::Y, RowDirection::Down).unwrap();
+        let frame =
+            GridFrame::from_normal(DVec3::new(0.0, 15.0, -1.0), DVec3::Y, RowDirection::Down).unwrap();
         assert!((frame.e_j - DVec3::X).length() < 1e-15);
         assert!((frame.e_i - DVec3::Z).length() < 1e-15);
         let up = GridFrame::from_normal(DVec3::ZERO, DVec3::Z, RowDirection::Up).unwrap();

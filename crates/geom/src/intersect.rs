@@ -155,7 +155,8 @@ mod tests {
 
     #[test]
     fn segment_through_interior_hits_with_barycentrics() {
-        let hit = segment_triangle(DVec3::new(0.25, 0.25, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).unwrap();
+        let hit =
+            segment_triangle(DVec3::new(0.25, 0.25, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).unwrap();
         assert!((hit.s - 0.5).abs() < 1e-15);
         let [w0, w1, w2] = hit.barycentric;
         assert!((w0 - 0.5).abs() < 1e-15 && (w1 - 0.25).abs() < 1e-15 && (w2 - 0.25).abs() < 1e-15);
@@ -163,19 +164,28 @@ mod tests {
 
     #[test]
     fn segment_stopping_short_misses() {
-        assert!(segment_triangle(DVec3::new(0.25, 0.25, 1.0), DVec3::new(0.0, 0.0, -0.5), &unit_tri()).is_none());
+        assert!(
+            segment_triangle(DVec3::new(0.25, 0.25, 1.0), DVec3::new(0.0, 0.0, -0.5), &unit_tri()).is_none()
+        );
     }
 
     #[test]
     fn segment_outside_triangle_misses() {
-        assert!(segment_triangle(DVec3::new(0.8, 0.8, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).is_none());
-        assert!(segment_triangle(DVec3::new(-0.1, 0.3, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).is_none());
+        assert!(
+            segment_triangle(DVec3::new(0.8, 0.8, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).is_none()
+        );
+        assert!(
+            segment_triangle(DVec3::new(-0.1, 0.3, 1.0), DVec3::new(0.0, 0.0, -2.0), &unit_tri()).is_none()
+        );
     }
 
     #[test]
     fn parallel_segment_misses_and_endpoints_are_inclusive() {
-        assert!(segment_triangle(DVec3::new(0.1, 0.1, 0.0), DVec3::new(0.2, 0.0, 0.0), &unit_tri()).is_none());
-        let hit = segment_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.0, 0.0, -1.0), &unit_tri()).unwrap();
+        assert!(
+            segment_triangle(DVec3::new(0.1, 0.1, 0.0), DVec3::new(0.2, 0.0, 0.0), &unit_tri()).is_none()
+        );
+        let hit =
+            segment_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.0, 0.0, -1.0), &unit_tri()).unwrap();
         assert_eq!(hit.s, 1.0);
     }
 

@@ -31,7 +31,11 @@ impl TriangleMesh {
         for (t, tri) in triangles.iter().enumerate() {
             for &index in tri {
                 if index as usize >= vertices.len() {
-                    return Err(MeshError::IndexOutOfRange { triangle: t, index, n_vertices: vertices.len() });
+                    return Err(MeshError::IndexOutOfRange {
+                        triangle: t,
+                        index,
+                        n_vertices: vertices.len(),
+                    });
                 }
             }
         }

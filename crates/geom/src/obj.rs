@@ -5,7 +5,12 @@ use std::io::{self, Write};
 use glam::DVec3;
 
 /// Writes `vertices` and 0-based `triangles` as an OBJ object named `name` (OBJ indices are 1-based).
-pub fn write_obj(mut w: impl Write, name: &str, vertices: &[DVec3], triangles: &[[u32; 3]]) -> io::Result<()> {
+pub fn write_obj(
+    mut w: impl Write,
+    name: &str,
+    vertices: &[DVec3],
+    triangles: &[[u32; 3]],
+) -> io::Result<()> {
     writeln!(w, "# written by anima")?;
     writeln!(w, "o {name}")?;
     for v in vertices {

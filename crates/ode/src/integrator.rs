@@ -5,6 +5,25 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Coord, OdeSystem};
 
+/// Positions and velocities of a second-order system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State<C> {
+    pub x: Vec<C>,
+    pub v: Vec<C>,
+}
+
+impl<C: Coord> State<C> {
+    pub fn new(x: Vec<C>, v: Vec<C>) -> Self {
+        assert_eq!(x.len(), v.len(), "as many velocities as positions");
+        Self { x, v }
+    }
+
+    /// `n` coordinates, all zero.
+    pub fn zeros(n: usize) -> Self {
+        Self { x: vec![C::default(); n], v: vec![C::default(); n] }
+    }
+}
+
 /// The integration methods a scene can name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Integrator {
@@ -102,17 +121,17 @@ impl<C: Coord> Stepper<C> {
         self.integrator
     }
 
-    /// One step of size `h` from (x, v) at time `t` into (x_new, v_new).
+    /// One step of size `h` from `now` (at time `t`) into `next`.
     pub fn step<S: OdeSystem<Coord = C>>(
         &mut self,
         sys: &mut S,
         t: f64,
         h: f64,
-        x: &[C],
-        v: &[C],
-        x_new: &mut [C],
-        v_new: &mut [C],
+        now: &State<C>,
+        next: &mut State<C>,
     ) {
+        let (x, v) = (&now.x[..], &now.v[..]);
+        let (x_new, v_new) = (&mut next.x[..], &mut next.v[..]);
         let n = sys.n_coords();
         assert!(x.len() == n && v.len() == n && x_new.len() == n && v_new.len() == n && self.a.len() == n);
         match self.integrator {
@@ -196,33 +215,37 @@ mod tests {
 
     fn error_at_one(integrator: Integrator, h: f64) -> f64 {
         let mut st = Stepper::new(integrator, 1);
-        let (mut x, mut v) = ([4.0], [0.0]);
-        let (mut xn, mut vn) = ([0.0], [0.0]);
+        let mut now = State::new(vec![4.0], vec![0.0]);
+        let mut next = State::zeros(1);
         let steps = (1.0 / h).round() as usize;
         for k in 0..steps {
-            st.step(&mut Spring, k as f64 * h, h, &x, &v, &mut xn, &mut vn);
-            (x, v) = (xn, vn);
+            st.step(&mut Spring, k as f64 * h, h, &now, &mut next);
+            std::mem::swap(&mut now, &mut next);
         }
-        (x[0] - (2.0 + 2.0 * 1.0f64.cos())).abs()
+        (now.x[0] - (2.0 + 2.0 * 1.0f64.cos())).abs()
     }
 
     #[test]
     fn forward_euler_uses_the_old_velocity() {
-        let mut st = Stepper::new(Integrator::ForwardEuler, 1);
-        let (mut xn, mut vn) = ([0.0], [0.0]);
-        st.step(&mut Spring, 0.0, 1.0, &[4.0], &[0.0], &mut xn, &mut vn);
-        assert_eq!((xn[0], vn[0]), (4.0, -2.0));
-        let mut st = Stepper::new(Integrator::SymplecticEuler, 1);
-        st.step(&mut Spring, 0.0, 1.0, &[4.0], &[0.0], &mut xn, &mut vn);
-        assert_eq!((xn[0], vn[0]), (2.0, -2.0));
+        let now = State::new(vec![4.0], vec![0.0]);
+        let mut next = State::zeros(1);
+        Stepper::new(Integrator::ForwardEuler, 1).step(&mut Spring, 0.0, 1.0, &now, &mut next);
+        assert_eq!((next.x[0], next.v[0]), (4.0, -2.0));
+        Stepper::new(Integrator::SymplecticEuler, 1).step(&mut Spring, 0.0, 1.0, &now, &mut next);
+        assert_eq!((next.x[0], next.v[0]), (2.0, -2.0));
     }
 
     #[test]
     fn convergence_orders() {
-        for (integrator, order) in [(Integrator::ForwardEuler, 1.0), (Integrator::SymplecticEuler, 1.0), (Integrator::Rk4, 4.0)] {
+        for (integrator, order) in
+            [(Integrator::ForwardEuler, 1.0), (Integrator::SymplecticEuler, 1.0), (Integrator::Rk4, 4.0)]
+        {
             let (e1, e2) = (error_at_one(integrator, 0.01), error_at_one(integrator, 0.005));
             let observed = (e1 / e2).log2();
-            assert!((observed - order).abs() < 0.15, "{integrator}: observed order {observed}, expected {order}");
+            assert!(
+                (observed - order).abs() < 0.15,
+                "{integrator}: observed order {observed}, expected {order}"
+            );
         }
     }
 

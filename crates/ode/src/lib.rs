@@ -14,7 +14,7 @@ mod coord;
 mod integrator;
 
 pub use coord::Coord;
-pub use integrator::{Integrator, ParseIntegratorError, Stepper};
+pub use integrator::{Integrator, ParseIntegratorError, State, Stepper};
 
 /// A second-order system x'' = a(t, x, v) over `n_coords` coordinates.
 pub trait OdeSystem {

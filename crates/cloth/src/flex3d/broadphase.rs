@@ -84,9 +84,8 @@ impl TriangleGrid {
     /// Cells overlapped by a box, clamped to the grid (a box outside the grid maps to its border cells,
     /// which is safe because only triangles inside the grid exist).
     fn cell_range(&self, b: &Aabb) -> ([usize; 3], [usize; 3]) {
-        let clamp = |v: f64, d: usize| -> usize {
-            if v.is_nan() || v <= 0.0 { 0 } else { (v as usize).min(d - 1) }
-        };
+        let clamp =
+            |v: f64, d: usize| -> usize { if v.is_nan() || v <= 0.0 { 0 } else { (v as usize).min(d - 1) } };
         let lo = (b.min - self.origin) * self.inv_cell;
         let hi = (b.max - self.origin) * self.inv_cell;
         (

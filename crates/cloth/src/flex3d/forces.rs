@@ -136,11 +136,7 @@ pub(crate) fn acceleration_with_friction(
     let friction = match mode {
         FrictionMode::Literal => {
             let speed2 = v.length_squared();
-            if speed2 == 0.0 || mu == 0.0 {
-                DVec3::ZERO
-            } else {
-                v * (-mu * f.length() / speed2.sqrt())
-            }
+            if speed2 == 0.0 || mu == 0.0 { DVec3::ZERO } else { v * (-mu * f.length() / speed2.sqrt()) }
         }
         FrictionMode::Viscous => v * -mu,
     };

@@ -1,7 +1,7 @@
 //! A FLEX3D world: every surface of a scene as one flat particle state, stepped together.
 
 use anima_geom::{Aabb, DVec3, GridFrame, PreparedTriangle, SurfaceGrid, TriangleMesh, grid_triangles};
-use anima_ode::{OdeSystem, Stepper};
+use anima_ode::{OdeSystem, State, Stepper};
 
 use super::broadphase::TriangleGrid;
 use super::desc::{
@@ -139,10 +139,9 @@ struct Colliders {
 pub struct Flex3dWorld {
     model: Model,
     stepper: Stepper<DVec3>,
-    x: Vec<DVec3>,
-    v: Vec<DVec3>,
-    x_new: Vec<DVec3>,
-    v_new: Vec<DVec3>,
+    /// State at t and the tentative state at t + Δt (Nedel 1993, Fig. 5.3).
+    now: State<DVec3>,
+    next: State<DVec3>,
     mass: Vec<f64>,
     surfaces: Vec<SurfaceInfo>,
     pinned_of_surface: Vec<Vec<usize>>,
@@ -195,7 +194,10 @@ impl Flex3dWorld {
             let mut pins = Vec::new();
             for &(i, j) in &s.fixed {
                 if i >= s.rows || j >= s.cols {
-                    return Err(err(format!("fixed point ({i}, {j}) is outside the {}×{} mesh", s.rows, s.cols)));
+                    return Err(err(format!(
+                        "fixed point ({i}, {j}) is outside the {}×{} mesh",
+                        s.rows, s.cols
+                    )));
                 }
                 let p = offset + grid.index(i, j);
                 if !pinned[p] {
@@ -215,7 +217,11 @@ impl Flex3dWorld {
                     .collect(),
             );
             let m = s.particle_mass_kg;
-            let ext = if opts.external_force_is_acceleration { scene.external_force_n * m } else { scene.external_force_n };
+            let ext = if opts.external_force_is_acceleration {
+                scene.external_force_n * m
+            } else {
+                scene.external_force_n
+            };
             forces.push(SurfaceForces {
                 offset,
                 rows: s.rows,
@@ -268,10 +274,8 @@ impl Flex3dWorld {
         Ok(Self {
             stepper: Stepper::new(scene.integrator, n),
             model,
-            v: vec![DVec3::ZERO; n],
-            x_new: x.clone(),
-            v_new: vec![DVec3::ZERO; n],
-            x,
+            next: State::new(x.clone(), vec![DVec3::ZERO; n]),
+            now: State::new(x, vec![DVec3::ZERO; n]),
             mass,
             surfaces,
             pinned_of_surface,
@@ -310,15 +314,15 @@ impl Flex3dWorld {
 
     /// Positions of every particle of every surface, surface after surface, row-major.
     pub fn positions(&self) -> &[DVec3] {
-        &self.x
+        &self.now.x
     }
 
     pub fn velocities(&self) -> &[DVec3] {
-        &self.v
+        &self.now.v
     }
 
     pub fn surface_positions(&self, surface: usize) -> &[DVec3] {
-        &self.x[self.surfaces[surface].range()]
+        &self.now.x[self.surfaces[surface].range()]
     }
 
     pub fn is_pinned(&self, particle: usize) -> bool {
@@ -333,13 +337,12 @@ impl Flex3dWorld {
     /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4).
     pub fn step(&mut self) -> Result<(), NonFiniteError> {
         let t = self.time();
-        self.stepper.step(&mut self.model, t, self.dt, &self.x, &self.v, &mut self.x_new, &mut self.v_new);
+        self.stepper.step(&mut self.model, t, self.dt, &self.now, &mut self.next);
         self.apply_constraints();
         if self.options.collisions && !self.colliders.corners.is_empty() {
             self.collide();
         }
-        std::mem::swap(&mut self.x, &mut self.x_new);
-        std::mem::swap(&mut self.v, &mut self.v_new);
+        std::mem::swap(&mut self.now, &mut self.next);
         self.step += 1;
         self.check_finite()
     }
@@ -363,8 +366,8 @@ impl Flex3dWorld {
                 }
             }
             for &p in pins {
-                self.x_new[p] = self.x[p] + u * self.dt + jump;
-                self.v_new[p] = u;
+                self.next.x[p] = self.now.x[p] + u * self.dt + jump;
+                self.next.v[p] = u;
             }
         }
     }
@@ -375,7 +378,8 @@ impl Flex3dWorld {
     /// (smallest segment parameter, then lowest triangle index) is answered with a 1-D elastic impact, and
     /// the particle stays where it was at the start of the step.
     fn collide(&mut self) {
-        let Self { colliders, x, x_new, v_new, model, mass, options, counts, .. } = self;
+        let Self { colliders, now, next, model, mass, options, counts, .. } = self;
+        let (x, x_new, v_new) = (&now.x, &mut next.x, &mut next.v);
         let Colliders { n_static, prepared, boxes, corners, grid } = colliders;
         let n_static = *n_static;
         for t in n_static..corners.len() {
@@ -471,7 +475,7 @@ impl Flex3dWorld {
     }
 
     fn check_finite(&self) -> Result<(), NonFiniteError> {
-        let bad = self.x.iter().zip(&self.v).position(|(x, v)| !(x.is_finite() && v.is_finite()));
+        let bad = self.now.x.iter().zip(&self.now.v).position(|(x, v)| !(x.is_finite() && v.is_finite()));
         let Some(p) = bad else { return Ok(()) };
         let s = self.surfaces.iter().find(|s| s.range().contains(&p)).expect("every particle has a surface");
         let local = p - s.offset;
@@ -488,21 +492,32 @@ impl Flex3dWorld {
     pub fn diagnostics(&self) -> Diagnostics {
         let mut max_speed = 0.0f64;
         let mut kinetic_energy = 0.0;
-        for (v, m) in self.v.iter().zip(&self.mass) {
+        for (v, m) in self.now.v.iter().zip(&self.mass) {
             let s2 = v.length_squared();
             max_speed = max_speed.max(s2.sqrt());
             kinetic_energy += 0.5 * m * s2;
         }
-        let all_finite = self.x.iter().chain(&self.v).all(|p| p.is_finite());
-        Diagnostics { max_speed, kinetic_energy, bounds: Aabb::from_points(self.x.iter().copied()), all_finite }
+        let all_finite = self.now.x.iter().chain(&self.now.v).all(|p| p.is_finite());
+        Diagnostics {
+            max_speed,
+            kinetic_energy,
+            bounds: Aabb::from_points(self.now.x.iter().copied()),
+            all_finite,
+        }
     }
 
     /// Particles that lie inside a static object (a closed mesh) now.
     pub fn penetrations(&self) -> usize {
         let boxes: Vec<Aabb> = self.objects.iter().map(|o| o.aabb()).collect();
-        self.x
+        self.now
+            .x
             .iter()
-            .filter(|&&p| self.objects.iter().zip(&boxes).any(|(o, b)| b.overlaps(&Aabb::from_points([p])) && o.contains_point(p)))
+            .filter(|&&p| {
+                self.objects
+                    .iter()
+                    .zip(&boxes)
+                    .any(|(o, b)| b.overlaps(&Aabb::from_points([p])) && o.contains_point(p))
+            })
             .count()
     }
 
@@ -510,10 +525,11 @@ impl Flex3dWorld {
     pub fn max_strain(&self) -> f64 {
         let mut worst = 0.0f64;
         for s in &self.surfaces {
-            let x = &self.x[s.range()];
+            let x = &self.now.x[s.range()];
             let (m, n, r) = (s.rows, s.cols, s.spacing);
             let rd = r * std::f64::consts::SQRT_2;
-            let mut check = |p: usize, q: usize, l0: f64| worst = worst.max(((x[p] - x[q]).length() - l0).abs() / l0);
+            let mut check =
+                |p: usize, q: usize, l0: f64| worst = worst.max(((x[p] - x[q]).length() - l0).abs() / l0);
             for i in 0..m {
                 for j in 0..n {
                     let p = i * n + j;

@@ -1,0 +1,104 @@
+//! Scene files: the RON conversions of the thesis scripts, determinism, and runs through the CLI library.
+
+use anima::experiments::{ThesisScene, flex3d_assets};
+use anima::runner::{RunOptions, run};
+use anima_cloth::flex3d::Flex3dWorld;
+use anima_scene::LoadOptions;
+
+/// Runs a loaded scene for `steps` steps and returns the final positions.
+fn positions_after(loaded: &anima_scene::LoadedScene, steps: usize) -> Vec<anima_geom::DVec3> {
+    let objects = loaded.objects.iter().map(|(_, m)| m.clone()).collect();
+    let mut world = Flex3dWorld::new(&loaded.scene, objects).unwrap();
+    world.run_to_step(steps).unwrap();
+    world.positions().to_vec()
+}
+
+#[test]
+fn par_and_its_ron_conversion_run_identically() {
+    for scene in ThesisScene::ALL {
+        let par = scene.load().unwrap();
+        let ron_path = flex3d_assets().join(format!("{}.ron", scene.slug()));
+        let ron = anima_scene::load(&ron_path, &LoadOptions::default()).unwrap();
+        assert_eq!(par.scene, ron.scene, "{}: the committed RON must say what the script says", scene.slug());
+        assert_eq!(positions_after(&par, 500), positions_after(&ron, 500), "{}", scene.slug());
+    }
+}
+
+#[test]
+fn committed_ron_scenes_are_what_convert_writes() {
+    for scene in ThesisScene::ALL {
+        let bytes = std::fs::read(flex3d_assets().join(scene.script())).unwrap();
+        let fresh = anima_scene::convert_par_to_ron(&bytes, scene.script(), scene.gravity()).unwrap();
+        let committed =
+            std::fs::read_to_string(flex3d_assets().join(format!("{}.ron", scene.slug()))).unwrap();
+        assert_eq!(
+            fresh,
+            committed,
+            "assets/flex3d/{}.ron is stale: run `cargo run --release -p anima -- convert assets/flex3d/{} -o assets/flex3d/{}.ron --gravity {}`",
+            scene.slug(),
+            scene.script(),
+            scene.slug(),
+            if scene.gravity() == anima_geom::DVec3::ZERO { "off" } else { "on" }
+        );
+    }
+}
+
+#[test]
+fn repeated_runs_are_bit_identical() {
+    for scene in [ThesisScene::Tablecloth, ThesisScene::Cardboard] {
+        let loaded = scene.load().unwrap();
+        assert_eq!(positions_after(&loaded, 3000), positions_after(&loaded, 3000), "{}", scene.slug());
+    }
+}
+
+#[test]
+fn every_integrator_keeps_the_curtain_finite_at_the_thesis_step() {
+    for integrator in anima_ode::Integrator::ALL {
+        let mut loaded = ThesisScene::Curtain.load().unwrap();
+        loaded.scene.integrator = integrator;
+        let p = positions_after(&loaded, 5000);
+        assert!(p.iter().all(|x| x.is_finite()), "{integrator}");
+    }
+}
+
+#[test]
+fn a_diverging_run_reports_the_step_where_it_went_non_finite() {
+    let mut loaded = ThesisScene::Curtain.load().unwrap();
+    loaded.scene.dt_s = 0.5;
+    let objects = vec![];
+    let mut world = Flex3dWorld::new(&loaded.scene, objects).unwrap();
+    let err = world.run_to_step(100_000).unwrap_err();
+    assert!(err.step > 1 && err.step < 100_000, "{err}");
+    assert_eq!(err.surface, "cortina");
+    assert!(err.to_string().contains("non-finite state at step"), "{err}");
+}
+
+#[test]
+fn run_writes_frames_pictures_and_summary() {
+    let dir = std::env::temp_dir().join(format!("anima-run-test-{}", std::process::id()));
+    let mut loaded = ThesisScene::Tablecloth.load().unwrap();
+    loaded.scene.duration_s = 1.0;
+    let opts = RunOptions {
+        out_dir: Some(dir.clone()),
+        write_frames: true,
+        frame0: true,
+        pictures: true,
+        progress: false,
+    };
+    let outcome = run(&loaded, &opts, |_, _| {}).unwrap();
+    let s = &outcome.summary;
+    assert_eq!((s.steps, s.frames), (1000, 2));
+    assert!(s.all_finite && s.non_finite.is_none());
+    assert_eq!(s.penetrations, 0);
+    for name in ["toalha_0.OBT", "toalha_1.OBT", "toalha_2.OBT", "toalha_2.obj", "final.png", "frames.png"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let obt =
+        anima_geom::obt::read_obt(std::fs::File::open(dir.join("toalha_2.OBT")).unwrap(), Default::default())
+            .unwrap();
+    assert_eq!((obt.vertices.len(), obt.faces.len()), (400, 2 * 19 * 19));
+    for (a, b) in obt.vertices.iter().zip(outcome.world.positions()) {
+        assert!((*a - *b).abs().max_element() <= 5e-7, "frame file must hold the final state to 6 decimals");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
