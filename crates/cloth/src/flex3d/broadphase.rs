@@ -1,11 +1,25 @@
-//! A uniform grid over triangle bounding boxes, rebuilt every step, so that each particle's path is
-//! tested only against nearby triangles. It changes no result: the candidates it returns are a superset
-//! of the triangles the path can meet, and the exact test and tie-breaking stay those of the brute force.
+//! A uniform grid over triangle bounding boxes, so that each particle's path is tested only against nearby
+//! triangles. It changes no result: the candidates it returns are a superset of the triangles the path can
+//! meet, and the exact test and tie-breaking stay those of the brute force.
+//!
+//! Two ways to bin: [`Binning::Spanning`] puts a triangle in every cell its box overlaps (for static
+//! objects, built once, whose triangles may be large), and [`Binning::MinCorner`] puts it only in the cell
+//! of its box's lowest corner, with cells as large as the largest box, so that a query widened by one cell
+//! still finds it (for surfaces, rebuilt every step: one entry per triangle keeps the rebuild cheap).
 
 use anima_geom::{Aabb, DVec3};
 
+/// How triangles are put into cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum Binning {
+    #[default]
+    Spanning,
+    MinCorner,
+}
+
 #[derive(Debug, Default, Clone)]
 pub(crate) struct TriangleGrid {
+    binning: Binning,
     origin: DVec3,
     inv_cell: f64,
     dims: [usize; 3],
@@ -21,7 +35,8 @@ pub(crate) struct TriangleGrid {
 
 impl TriangleGrid {
     /// Rebuilds the grid for the given triangle boxes. Buffers are reused between steps.
-    pub fn rebuild(&mut self, boxes: &[Aabb]) {
+    pub fn rebuild(&mut self, boxes: &[Aabb], binning: Binning) {
+        self.binning = binning;
         let bounds = boxes.iter().fold(Aabb::EMPTY, |b, t| b.union(*t));
         self.stamps.clear();
         self.stamps.resize(boxes.len(), 0);
@@ -32,11 +47,17 @@ impl TriangleGrid {
             self.entries.clear();
             return;
         }
-        // Cell size: the mean triangle extent, so a triangle covers a few cells; capped so that the
-        // grid has at most about four cells per triangle.
-        let mean_extent = boxes.iter().map(|b| b.size().max_element()).sum::<f64>() / boxes.len() as f64;
+        // Cell size: spanning bins use the mean triangle extent, so a triangle covers a few cells;
+        // min-corner bins need cells at least as large as the largest box. Either way the grid is capped
+        // at about four cells per triangle.
+        let extent = match binning {
+            Binning::Spanning => {
+                boxes.iter().map(|b| b.size().max_element()).sum::<f64>() / boxes.len() as f64
+            }
+            Binning::MinCorner => boxes.iter().map(|b| b.size().max_element()).fold(0.0, f64::max),
+        };
         let size = bounds.size();
-        let mut cell = mean_extent.max(size.max_element() * 1e-6).max(f64::MIN_POSITIVE);
+        let mut cell = extent.max(size.max_element() * 1e-6).max(f64::MIN_POSITIVE);
         let max_cells = (4 * boxes.len()).max(64) as f64;
         loop {
             let d = (size / cell).floor() + DVec3::ONE;
@@ -52,7 +73,7 @@ impl TriangleGrid {
         self.starts.clear();
         self.starts.resize(n_cells + 1, 0);
         for b in boxes {
-            let (lo, hi) = self.cell_range(b);
+            let (lo, hi) = self.insert_range(b);
             for c in self.cells(lo, hi) {
                 self.starts[c + 1] += 1;
             }
@@ -65,7 +86,7 @@ impl TriangleGrid {
         self.fill.clear();
         self.fill.extend_from_slice(&self.starts);
         for (t, b) in boxes.iter().enumerate() {
-            let (lo, hi) = self.cell_range(b);
+            let (lo, hi) = self.insert_range(b);
             for c in self.cells(lo, hi) {
                 self.entries[self.fill[c] as usize] = t as u32;
                 self.fill[c] += 1;
@@ -79,6 +100,17 @@ impl TriangleGrid {
         (lo[2]..=hi[2]).flat_map(move |z| {
             (lo[1]..=hi[1]).flat_map(move |y| (lo[0]..=hi[0]).map(move |x| (z * dy + y) * dx + x))
         })
+    }
+
+    /// Cells a triangle with box `b` goes into.
+    fn insert_range(&self, b: &Aabb) -> ([usize; 3], [usize; 3]) {
+        match self.binning {
+            Binning::Spanning => self.cell_range(b),
+            Binning::MinCorner => {
+                let (lo, _) = self.cell_range(b);
+                (lo, lo)
+            }
+        }
     }
 
     /// Cells overlapped by a box, clamped to the grid (a box outside the grid maps to its border cells,
@@ -104,7 +136,18 @@ impl TriangleGrid {
             self.stamps.iter_mut().for_each(|s| *s = 0);
             self.stamp = 1;
         }
-        let (lo, hi) = self.cell_range(b);
+        let (mut lo, hi) = self.cell_range(b);
+        if self.binning == Binning::MinCorner {
+            // A box overlapping `b` has its lowest corner at most one cell below `b`'s, and it is in one
+            // cell only, so no de-duplication is needed.
+            lo = lo.map(|c| c.saturating_sub(1));
+            for c in self.cells(lo, hi) {
+                for &t in &self.entries[self.starts[c] as usize..self.starts[c + 1] as usize] {
+                    visit(t as usize);
+                }
+            }
+            return;
+        }
         for c in self.cells(lo, hi) {
             for &t in &self.entries[self.starts[c] as usize..self.starts[c + 1] as usize] {
                 let slot = &mut self.stamps[t as usize];

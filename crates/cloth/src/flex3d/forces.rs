@@ -39,50 +39,49 @@ fn hooke(xp: DVec3, xq: DVec3, k: f64, l0: f64) -> DVec3 {
     d * (-k * (l - l0) / l)
 }
 
-/// Adds the force of every spring p → p + dq over the given rows and column range.
-///
-/// The springs of one class form a regular stencil on the grid, so no index arrays are needed: this is
-/// the hot loop of a FLEX3D step.
-#[inline(always)]
-#[expect(clippy::too_many_arguments, reason = "stencil description; called only from add_spring_forces")]
-fn spring_stencil(
-    x: &[DVec3],
-    f: &mut [DVec3],
-    cols: usize,
-    row_count: usize,
-    j0: usize,
-    j1: usize,
-    dq: usize,
-    k: f64,
-    l0: f64,
-) {
-    for i in 0..row_count {
-        let base = i * cols;
-        for p in base + j0..base + j1 {
-            let q = p + dq;
-            let fp = hooke(x[p], x[q], k, l0);
-            f[p] += fp;
-            f[q] -= fp;
-        }
-    }
-}
-
 /// Elastic forces of one surface (horizontal, vertical, diagonal and anti-diagonal springs) added to `f`.
 /// `x` and `f` are the surface's own slices.
+///
+/// The springs form a regular stencil on the grid, so no index arrays are needed. The loop walks the grid a
+/// pair of rows at a time with row slices of known length, so that the compiler can drop bounds checks:
+/// this is the hot loop of a FLEX3D step.
 pub(crate) fn add_spring_forces(s: &SurfaceForces, x: &[DVec3], f: &mut [DVec3]) {
     let (m, n, r) = (s.rows, s.cols, s.spacing);
     let rd = r * std::f64::consts::SQRT_2;
     let [kh, kv, kd] = s.k;
-    if kh != 0.0 {
-        spring_stencil(x, f, n, m, 0, n - 1, 1, kh, r);
-    }
-    if kv != 0.0 {
-        spring_stencil(x, f, n, m - 1, 0, n, n, kv, r);
-    }
-    if kd != 0.0 {
-        // (i, j)–(i+1, j+1) and (i, j+1)–(i+1, j).
-        spring_stencil(x, f, n, m - 1, 0, n - 1, n + 1, kd, rd);
-        spring_stencil(x, f, n, m - 1, 1, n, n - 1, kd, rd);
+    for i in 0..m {
+        let (f_top, f_rest) = f[i * n..].split_at_mut(n);
+        let x_top = &x[i * n..(i + 1) * n];
+        if kh != 0.0 {
+            for j in 0..n - 1 {
+                let fp = hooke(x_top[j], x_top[j + 1], kh, r);
+                f_top[j] += fp;
+                f_top[j + 1] -= fp;
+            }
+        }
+        if i + 1 == m {
+            break;
+        }
+        let x_bot = &x[(i + 1) * n..(i + 2) * n];
+        let f_bot = &mut f_rest[..n];
+        if kv != 0.0 {
+            for j in 0..n {
+                let fp = hooke(x_top[j], x_bot[j], kv, r);
+                f_top[j] += fp;
+                f_bot[j] -= fp;
+            }
+        }
+        if kd != 0.0 {
+            // (i, j)–(i+1, j+1) and (i, j+1)–(i+1, j).
+            for j in 0..n - 1 {
+                let fp = hooke(x_top[j], x_bot[j + 1], kd, rd);
+                f_top[j] += fp;
+                f_bot[j + 1] -= fp;
+                let fq = hooke(x_top[j + 1], x_bot[j], kd, rd);
+                f_top[j + 1] += fq;
+                f_bot[j] -= fq;
+            }
+        }
     }
 }
 

@@ -3,7 +3,7 @@
 use anima_geom::{Aabb, DVec3, GridFrame, PreparedTriangle, SurfaceGrid, TriangleMesh, grid_triangles};
 use anima_ode::{OdeSystem, State, Stepper};
 
-use super::broadphase::TriangleGrid;
+use super::broadphase::{Binning, TriangleGrid};
 use super::desc::{
     ContactApproach, Flex3dScene, FrictionMode, ModelOptions, StaticResponse, TranslationMode,
 };
@@ -121,17 +121,21 @@ impl OdeSystem for Model {
     }
 }
 
-/// Collision data: static triangles prepared once, surface triangles re-prepared from the start-of-step
-/// positions every step (spec S3.5.5, A-14).
+/// Collision data: static triangles prepared and binned once; surface triangles binned every step from
+/// their start-of-step positions (spec S3.5.5, A-14) and prepared only when a path comes near them.
 #[derive(Debug, Clone, Default)]
 struct Colliders {
     n_static: usize,
-    /// Static triangles first, then every surface's triangles in world particle indices.
-    prepared: Vec<PreparedTriangle>,
+    static_prepared: Vec<PreparedTriangle>,
+    /// Boxes of all triangles: static objects first, then every surface's.
     boxes: Vec<Aabb>,
     /// Particles of each triangle; `u32::MAX` for the corners of static triangles.
     corners: Vec<[u32; 3]>,
-    grid: TriangleGrid,
+    static_grid: TriangleGrid,
+    surface_grid: TriangleGrid,
+    /// Test every triangle, as FLEX3D did; only for checking that the grid changes nothing.
+    #[cfg(test)]
+    brute_force: bool,
 }
 
 /// All surfaces of a FLEX3D scene and the static objects they collide with.
@@ -257,18 +261,18 @@ impl Flex3dWorld {
             for mesh in &objects {
                 for t in 0..mesh.n_triangles() {
                     let c = mesh.corners(t);
-                    colliders.prepared.push(PreparedTriangle::new(c));
+                    colliders.static_prepared.push(PreparedTriangle::new(c));
                     colliders.boxes.push(Aabb::from_points(c));
                     colliders.corners.push([u32::MAX; 3]);
                 }
             }
-            colliders.n_static = colliders.prepared.len();
+            colliders.n_static = colliders.static_prepared.len();
+            colliders.static_grid.rebuild(&colliders.boxes, Binning::Spanning);
             for s in &surfaces {
                 for t in &s.triangles {
                     colliders.corners.push(t.map(|i| i + s.offset as u32));
                 }
             }
-            colliders.prepared.resize(colliders.corners.len(), PreparedTriangle::new([DVec3::ZERO; 3]));
             colliders.boxes.resize(colliders.corners.len(), Aabb::EMPTY);
         }
         Ok(Self {
@@ -380,14 +384,17 @@ impl Flex3dWorld {
     fn collide(&mut self) {
         let Self { colliders, now, next, model, mass, options, counts, .. } = self;
         let (x, x_new, v_new) = (&now.x, &mut next.x, &mut next.v);
-        let Colliders { n_static, prepared, boxes, corners, grid } = colliders;
+        #[cfg(test)]
+        let brute_force = colliders.brute_force;
+        #[cfg(not(test))]
+        let brute_force = false;
+        let Colliders { n_static, static_prepared, boxes, corners, static_grid, surface_grid, .. } =
+            colliders;
         let n_static = *n_static;
         for t in n_static..corners.len() {
-            let tri = corners[t].map(|i| x[i as usize]);
-            prepared[t] = PreparedTriangle::new(tri);
-            boxes[t] = Aabb::from_points(tri);
+            boxes[t] = Aabb::from_points(corners[t].map(|i| x[i as usize]));
         }
-        grid.rebuild(boxes);
+        surface_grid.rebuild(&boxes[n_static..], Binning::MinCorner);
         let pinned = &model.pinned;
         for p in 0..x.len() {
             if pinned[p] {
@@ -400,11 +407,18 @@ impl Flex3dWorld {
             }
             let seg = Aabb::from_points([o, x_new[p]]);
             let mut best: Option<(f64, usize, [f64; 3])> = None;
-            grid.query(&seg, |t| {
-                if !seg.overlaps(&boxes[t]) || corners[t].contains(&(p as u32)) {
+            let mut test = |t: usize| {
+                // A particle lies on the boxes of the triangles around it, so the cheap ownership test goes
+                // first.
+                if corners[t].contains(&(p as u32)) || !seg.overlaps(&boxes[t]) {
                     return;
                 }
-                if let Some(hit) = anima_geom::segment_triangle(o, dir, &prepared[t]) {
+                let tri = if t < n_static {
+                    static_prepared[t]
+                } else {
+                    PreparedTriangle::new(corners[t].map(|i| x[i as usize]))
+                };
+                if let Some(hit) = anima_geom::segment_triangle(o, dir, &tri) {
                     let better = match best {
                         None => true,
                         Some((s, bt, _)) => hit.s < s || (hit.s == s && t < bt),
@@ -413,14 +427,22 @@ impl Flex3dWorld {
                         best = Some((hit.s, t, hit.barycentric));
                     }
                 }
-            });
+            };
+            if brute_force {
+                (0..corners.len()).for_each(&mut test);
+            } else {
+                if n_static > 0 {
+                    static_grid.query(&seg, &mut test);
+                }
+                surface_grid.query(&seg, |t| test(t + n_static));
+            }
             let Some((_, t, bary)) = best else { continue };
             let v_tilde = v_new[p];
             if t < n_static {
                 v_new[p] = match options.static_response {
                     StaticResponse::Reverse => -v_tilde,
                     StaticResponse::ReflectNormal => {
-                        let n = prepared[t].unit_normal();
+                        let n = static_prepared[t].unit_normal();
                         v_tilde - n * (2.0 * v_tilde.dot(n))
                     }
                 };
@@ -566,6 +588,54 @@ fn elastic_1d(m1: f64, v1: DVec3, m2: f64, v2: DVec3) -> (DVec3, DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::flex3d::{Friction, SurfaceDesc};
+
+    /// A sheet pinned along one edge, blown back onto itself and dropped on a box: many surface and
+    /// object contacts.
+    fn folding_scene() -> (Flex3dScene, Vec<TriangleMesh>) {
+        let scene = Flex3dScene {
+            duration_s: 4.0,
+            frame_rate_hz: 1.0,
+            dt_s: 0.002,
+            gravity_m_s2: super::super::FLEX3D_GRAVITY,
+            external_force_n: DVec3::new(0.0, 0.0, -2.0),
+            friction: Friction { mode: FrictionMode::Literal, coefficient: 0.2 },
+            objects: vec![],
+            integrator: Default::default(),
+            options: ModelOptions::thesis(),
+            surfaces: vec![SurfaceDesc {
+                name: "s".into(),
+                rows: 16,
+                cols: 16,
+                spacing_m: 1.0,
+                centre_m: DVec3::new(0.0, 8.0, 0.0),
+                normal: DVec3::new(0.2, 1.0, 0.3),
+                particle_mass_kg: 0.2,
+                stiffness_n_m: [5.0; 3],
+                bending_n_m: [0.0; 3],
+                fixed: vec![],
+                translations: vec![],
+            }],
+        };
+        let table = anima_geom::box_mesh(DVec3::new(-3.0, 0.0, -3.0), DVec3::new(3.0, 5.0, 3.0));
+        (scene, vec![table])
+    }
+
+    #[test]
+    fn broad_phase_changes_no_result() {
+        let (scene, objects) = folding_scene();
+        let mut grid = Flex3dWorld::new(&scene, objects.clone()).unwrap();
+        let mut brute = Flex3dWorld::new(&scene, objects).unwrap();
+        brute.colliders.brute_force = true;
+        for step in 0..scene.n_steps() {
+            grid.step().unwrap();
+            brute.step().unwrap();
+            assert_eq!(grid.positions(), brute.positions(), "positions differ after step {step}");
+        }
+        let c = grid.collision_counts();
+        assert!(c.with_objects > 100 && c.with_surfaces > 10, "the scene must exercise both kinds: {c:?}");
+        assert_eq!(c, brute.collision_counts());
+    }
 
     #[test]
     fn elastic_impact_conserves_momentum_and_energy() {
