@@ -469,13 +469,13 @@ fn position_of(text: &str, needle: &str) -> (usize, usize) {
 
 #[test]
 fn ron_unknown_integrator() {
-    let ron = wind_ron().replace("integrator: r#forward-euler", "integrator: euler");
+    let ron = wind_ron().replace("integrator: ForwardEuler", "integrator: Euler");
     let e = from_ron_str(&ron).unwrap_err();
-    let (line, column) = position_of(&ron, "euler,");
+    let (line, column) = position_of(&ron, "Euler,");
     assert_eq!((e.line, e.column), (line, column), "{e}");
-    assert!(e.expected.contains("`Integrator`") && e.expected.contains("`rk4`"), "{e}");
-    assert_eq!(e.found, "euler");
-    assert!(e.to_string().ends_with("found \"euler\""), "{e}");
+    assert!(e.expected.contains("`Integrator`") && e.expected.contains("`Rk4`"), "{e}");
+    assert_eq!(e.found, "Euler");
+    assert!(e.to_string().ends_with("found \"Euler\""), "{e}");
 }
 
 #[test]
@@ -498,9 +498,10 @@ fn ron_letter_where_a_number_goes() {
 }
 
 #[test]
-fn ron_kebab_case_names_need_the_raw_prefix() {
-    let ron = wind_ron().replace("r#forward-euler", "forward-euler");
+fn ron_enum_variant_in_the_wrong_case_is_refused() {
+    let ron = wind_ron().replace("mode: Literal", "mode: literal");
     let e = from_ron_str(&ron).unwrap_err();
-    assert_eq!((e.line, e.column), position_of(&ron, "forward-euler"), "{e}");
-    assert_eq!(e.expected, "the raw identifier `r#forward-euler`");
+    assert_eq!((e.line, e.column), position_of(&ron, "literal,"), "{e}");
+    assert!(e.expected.contains("`Literal`") && e.expected.contains("`Viscous`"), "{e}");
+    assert_eq!(e.found, "literal");
 }
