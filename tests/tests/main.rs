@@ -2,3 +2,5 @@
 
 mod flex3d_experiments;
 mod flex3d_scenes;
+mod oliveira;
+mod standard_sheet;

@@ -23,6 +23,7 @@ pub fn run() -> Result<()> {
         eprintln!("xtask: rendering {} …", scene.slug());
         save(&format!("flex3d-{}.png", scene.slug()), &scene_sheet(scene)?)?;
     }
+    crate::oliveira::figures(&save)?;
     Ok(())
 }
 
@@ -55,7 +56,9 @@ fn fine_trajectory(h: f64) -> Vec<(f64, f64)> {
     let mut k = 0usize;
     for s in 1..=n {
         for _ in 0..every {
-            stepper.step(&mut sys, k as f64 * h, h, &now, &mut next);
+            stepper
+                .step(&mut sys, k as f64 * h, h, &now, &mut next)
+                .expect("the spring gives its Jacobian, so every method steps it");
             std::mem::swap(&mut now, &mut next);
             k += 1;
         }

@@ -1,7 +1,9 @@
 //! `cargo xtask`: reproduce the thesis experiments beside the thesis's own numbers and regenerate every
 //! figure in `docs/figures/`.
 
+mod bench;
 mod figures;
+mod oliveira;
 mod reproduce;
 
 use std::path::PathBuf;
@@ -20,6 +22,8 @@ struct Cli {
 enum Command {
     /// Re-run a thesis experiment and print the thesis's numbers beside ours:
     /// table-4-1, e-2 … e-8, or all (which also writes docs/reproduction/flex3d-results.md).
+    /// Oliveira 2013's drapes on static meshes: oliveira-1, oliveira-2, oliveira-3, or oliveira (all three,
+    /// which also writes docs/reproduction/oliveira-results.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the scene experiments: literal (default) or viscous.
@@ -28,6 +32,12 @@ enum Command {
     },
     /// Regenerate every reference plot and figure scene into docs/figures/.
     Figures,
+    /// Speed against error for every integrator, stability limits and the standard sheet: writes
+    /// docs/benchmarks.md and its plots (several minutes; --quick skips the smallest steps).
+    Bench {
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 /// The repository root (xtask lives one folder below it).
@@ -39,5 +49,6 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Reproduce { experiment, friction } => reproduce::run(&experiment, &friction),
         Command::Figures => figures::run(),
+        Command::Bench { quick } => bench::run(quick),
     }
 }

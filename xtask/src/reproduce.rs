@@ -41,6 +41,9 @@ impl Report {
 }
 
 pub fn run(experiment: &str, friction: &str) -> Result<()> {
+    if let Some(which) = experiment.strip_prefix("oliveira") {
+        return crate::oliveira::reproduce(which);
+    }
     let friction = match friction {
         "literal" => FrictionMode::Literal,
         "viscous" => FrictionMode::Viscous,

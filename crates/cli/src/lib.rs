@@ -6,3 +6,4 @@ pub mod experiments;
 pub mod output;
 pub mod picture;
 pub mod runner;
+pub mod sheet_run;

@@ -76,6 +76,9 @@ struct RunArgs {
     /// Apply −F/2 of each angular spring to its two outer particles (momentum-conserving bending).
     #[arg(long)]
     bend_reaction: bool,
+    /// Limit friction so it cannot reverse a velocity within one step (needed at large steps).
+    #[arg(long)]
+    friction_clamp: bool,
     /// Switch particle–triangle collisions off (an extension; FLEX3D always ran them).
     #[arg(long)]
     no_collisions: bool,
@@ -91,6 +94,10 @@ struct RunArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Sheet scenes: an OBJ of reference positions (such as another run's final.obj); the summary then
+    /// reports the RMS distance to it.
+    #[arg(long)]
+    reference: Option<PathBuf>,
 }
 
 fn parse_gravity(s: &str) -> Result<DVec3, String> {
@@ -127,7 +134,84 @@ fn load_default() -> Result<LoadedScene> {
     })
 }
 
+/// The struct name a RON scene file starts with (after comments), which says what kind of scene it is.
+fn ron_struct_name(src: &str) -> Option<&str> {
+    let mut rest = src;
+    loop {
+        rest = rest.trim_start();
+        if let Some(r) = rest.strip_prefix("//") {
+            rest = r.split_once('\n').map_or("", |(_, after)| after);
+        } else if rest.starts_with("#![") {
+            rest = rest.split_once('\n').map_or("", |(_, after)| after);
+        } else {
+            break;
+        }
+    }
+    let end = rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(rest.len());
+    (end > 0).then(|| &rest[..end])
+}
+
+fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode> {
+    let mut scene =
+        anima_scene::sheet::from_ron_str(src).map_err(|e| e.with_file(path.display().to_string()))?;
+    if let Some(i) = args.integrator {
+        scene.integrator = i;
+    }
+    if let Some(dt) = args.dt {
+        scene.dt_s = dt;
+    }
+    if let Some(d) = args.duration {
+        scene.duration_s = d;
+    }
+    let opts = anima::sheet_run::SheetRunOptions {
+        out_dir: Some(args.out.clone()),
+        reference: args.reference.clone(),
+        write_frames: !args.no_frames,
+        pictures: !args.no_pictures,
+        progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+    };
+    if !args.quiet {
+        eprintln!(
+            "anima: {} — {} particles, {} s at {} s ({})",
+            path.display(),
+            scene.sheet.n * scene.sheet.n,
+            scene.duration_s,
+            scene.dt_s,
+            scene.integrator
+        );
+    }
+    let s = anima::sheet_run::run_sheet(&scene, &path.display().to_string(), &opts)?;
+    let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
+    anima::output::write_atomic(&summary_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &s)?;
+        Ok(w.write_all(b"\n")?)
+    })?;
+    if !args.quiet {
+        let c = s.center_of_mass;
+        eprintln!(
+            "anima: {} steps in {:.2} s ({:.1} ns per particle-step); centre of mass ({:.4}, {:.4}, {:.4}) m, max strain {:.4}",
+            s.steps, s.wall_seconds, s.ns_per_particle_step, c[0], c[1], c[2], s.max_strain
+        );
+        if let Some(r) = s.rms_to_reference {
+            eprintln!("anima: RMS distance to the reference {r:.3e} m");
+        }
+    }
+    if let Some(e) = &s.error {
+        eprintln!("anima: error: the run stopped early: {e}");
+        return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn run_command(args: RunArgs) -> Result<ExitCode> {
+    if let Some(path) =
+        args.scene.as_ref().filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")))
+    {
+        let src = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        if ron_struct_name(&src) == Some("SheetScene") {
+            return run_sheet_command(&args, path, &src);
+        }
+    }
     let mut loaded = match &args.scene {
         Some(path) => anima_scene::load(path, &LoadOptions { gravity: args.gravity })?,
         None => load_default()?,
@@ -176,6 +260,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     }
     scene.options.external_force_is_acceleration |= args.external_is_acceleration;
     scene.options.bend_reaction |= args.bend_reaction;
+    scene.options.friction_clamp |= args.friction_clamp;
     if args.no_collisions {
         scene.options.collisions = false;
     }
@@ -214,6 +299,10 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
              try a smaller --dt or another --integrator",
             nf.step, nf.time, nf.surface, nf.row, nf.col
         );
+        return Ok(ExitCode::from(2));
+    }
+    if let Some(e) = &s.error {
+        eprintln!("anima: error: the run stopped early: {e}");
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anima_cloth::flex3d::{Flex3dWorld, NonFiniteError};
+use anima_cloth::flex3d::{Flex3dWorld, NonFiniteError, StepError};
 use anima_geom::obt::{ObtObject, write_obt};
 use anima_geom::{DVec3, obj::write_obj};
 use anima_scene::LoadedScene;
@@ -75,6 +75,8 @@ pub struct RunSummary {
     pub ns_per_particle_step: f64,
     pub all_finite: bool,
     pub non_finite: Option<NonFiniteReport>,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
     pub max_speed: f64,
     pub kinetic_energy: f64,
     pub max_strain: f64,
@@ -170,8 +172,12 @@ pub fn run(
         simulated_seconds: world.time(),
         wall_seconds,
         ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * particles.max(1)) as f64,
-        all_finite: failure.is_none() && d.all_finite,
-        non_finite: failure.as_ref().map(NonFiniteReport::from),
+        all_finite: !matches!(failure, Some(StepError::NonFinite(_))) && d.all_finite,
+        non_finite: match &failure {
+            Some(StepError::NonFinite(e)) => Some(NonFiniteReport::from(e)),
+            _ => None,
+        },
+        error: failure.as_ref().map(|e| e.to_string()),
         max_speed: d.max_speed,
         kinetic_energy: d.kinetic_energy,
         max_strain: world.max_strain(),
@@ -192,7 +198,7 @@ fn step_to(
     world: &mut Flex3dWorld,
     target: usize,
     bar: Option<&indicatif::ProgressBar>,
-) -> Result<(), NonFiniteError> {
+) -> Result<(), StepError> {
     // Update the bar in chunks so that it costs nothing measurable.
     const CHUNK: usize = 1000;
     while world.steps_taken() < target {

@@ -121,3 +121,36 @@ fn a_diverging_run_fails_and_names_the_step() {
     assert!(summary["non_finite"]["step"].as_u64().unwrap() > 0);
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+#[test]
+fn standard_sheet_runs_and_compares_with_a_reference() {
+    let dir = temp_dir("sheet");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/standard-sheet-32.ron");
+    let run = |out: &str, extra: &[&str]| -> serde_json::Value {
+        let out = dir.join(out);
+        let ok = anima()
+            .args(["run", "--quiet", "--no-frames", "--duration", "0.1", "--out"])
+            .arg(&out)
+            .args(extra)
+            .arg(&scene)
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok);
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap()
+    };
+    let first = run("a", &[]);
+    assert_eq!(first["steps"], 500);
+    assert_eq!(first["springs"], 2 * 32 * 31 + 2 * 31 * 31 + 2 * 32 * 30);
+    assert!(first["center_of_mass"].as_array().unwrap().len() == 3);
+    assert!(first["max_strain"].as_f64().unwrap() > 0.0);
+    assert!(dir.join("a/final.png").is_file() && dir.join("a/final.obj").is_file());
+    let reference = dir.join("a/final.obj");
+    let second = run("b", &["--reference", reference.to_str().unwrap()]);
+    // Same scene, same result; the OBJ holds 6 decimals.
+    assert!(second["rms_to_reference"].as_f64().unwrap() < 1e-6, "{second}");
+    let rk4 = run("c", &["--integrator", "rk4", "--reference", reference.to_str().unwrap()]);
+    let d = rk4["rms_to_reference"].as_f64().unwrap();
+    assert!(d > 1e-7 && d < 1e-2, "RK4 differs from symplectic Euler by a little: {d}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -7,3 +7,6 @@
 //! Everything is `f64` and stored as flat arrays over all particles of all surfaces.
 
 pub mod flex3d;
+pub mod network_sim;
+pub mod oliveira;
+pub mod spring_net;

@@ -9,14 +9,22 @@
 //! `impl Write`.
 
 mod grid;
+mod grid_mesh;
+pub mod halfedge;
 mod intersect;
 mod mesh;
 pub mod obj;
+mod obj_read;
 pub mod obt;
+pub mod query;
 mod shapes;
 
-pub use glam::DVec3;
+pub use glam::{DVec2, DVec3};
 pub use grid::{GridFrame, RowDirection, SurfaceGrid, grid_triangles};
+pub use grid_mesh::{DiagonalPattern, MaterialMesh, MaterialMeshError};
+pub use halfedge::{HalfEdges, TopologyError};
 pub use intersect::{Aabb, PreparedTriangle, SegmentHit, segment_triangle};
 pub use mesh::{MeshError, TriangleMesh};
+pub use obj_read::{ObjError, read_obj};
+pub use query::{Cylinder, HalfSpace, MeshSolid, Proximity, Solid, SolidError, Sphere, SurfaceHit};
 pub use shapes::box_mesh;

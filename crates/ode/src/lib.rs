@@ -1,20 +1,37 @@
 //! Ordinary differential equations of motion and the integrators that step them.
 //!
 //! A system is second order, x'' = a(t, x, v), the shape of every mechanical model in anima; as a
-//! first-order system its state is y = (x, v) with y' = (v, a). Each integrator here steps the same
+//! first-order system its state is y = (x, v) with y' = (v, a). Every integrator here steps the same
 //! [`OdeSystem`], so a scene can switch methods without touching its model. This crate knows nothing
 //! about cloth: coordinates are any [`Coord`] (plain `f64` for the Table 4.1 spring, `DVec3` for
 //! particles).
 //!
+//! - [`Stepper`] owns an [`Integrator`] and every scratch buffer it needs (so the step loop never
+//!   allocates): explicit and symplectic Euler, midpoint (RK2), classical RK4, Dormand–Prince 5(4),
+//!   Adams–Bashforth 4 and the Adams–Bashforth–Moulton 4 predictor–corrector (both started by RK4), the
+//!   thesis's adaptive Euler, and implicit (backward) Euler solved the Baraff–Witkin way (one Newton step,
+//!   exact Jacobians from a [`Linearized`] system, preconditioned conjugate gradients).
+//! - [`integrate`] drives a stepper with a [`StepControl`] (constant step, an embedded-error controller,
+//!   or the thesis's Euler rule) and stops with the step and coordinate where a value went non-finite.
+//! - [`stability`] estimates the largest frequency of a system and the largest stable step of each
+//!   explicit method, so a user is warned before a step is known to blow up.
+//!
 //! Steps are double-buffered, as FLEX3D kept its state at t and at t + Δt (Nedel 1993, Fig. 5.3): the
-//! integrator reads (x, v) and writes (x_new, v_new), and never updates a position while forces are
-//! still being evaluated.
+//! integrator reads `now` and writes `next`, and never updates a position while forces are still being
+//! evaluated.
 
+mod control;
 mod coord;
+mod implicit;
 mod integrator;
+pub mod stability;
+mod stepper;
 
+pub use control::{IntegrationError, IntegrationStats, StepControl, integrate};
 pub use coord::Coord;
-pub use integrator::{Integrator, ParseIntegratorError, State, Stepper};
+pub use implicit::{Jacobians, LinearSolver, Linearized};
+pub use integrator::{Integrator, ParseIntegratorError};
+pub use stepper::{OdeError, State, StepStats, Stepper};
 
 /// A second-order system x'' = a(t, x, v) over `n_coords` coordinates.
 pub trait OdeSystem {
@@ -25,4 +42,10 @@ pub trait OdeSystem {
 
     /// Writes the acceleration at (t, x, v) into `a` (all slices have length `n_coords`).
     fn acceleration(&mut self, t: f64, x: &[Self::Coord], v: &[Self::Coord], a: &mut [Self::Coord]);
+
+    /// The system's force Jacobians, for implicit integration and stability bounds; `None` (the default)
+    /// when it gives none, in which case implicit Euler refuses to step it.
+    fn linearized(&mut self) -> Option<&mut dyn Linearized<Self::Coord>> {
+        None
+    }
 }

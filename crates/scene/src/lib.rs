@@ -12,8 +12,10 @@
 
 mod error;
 mod load;
+pub mod oliveira;
 pub mod par;
 pub mod ron_scene;
+pub mod sheet;
 mod text;
 
 pub use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dScene};

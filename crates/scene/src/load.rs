@@ -109,7 +109,7 @@ pub fn convert_par_to_ron(src_bytes: &[u8], file_name: &str, gravity: DVec3) -> 
 
 /// RON is UTF-8 by definition, so unlike `.PAR` there is no Latin-1 fallback; the error points at the
 /// first bad byte.
-fn utf8(bytes: &[u8]) -> Result<&str, ParseError> {
+pub(crate) fn utf8(bytes: &[u8]) -> Result<&str, ParseError> {
     std::str::from_utf8(bytes).map_err(|e| {
         let good = std::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default();
         let line = 1 + good.matches('\n').count();

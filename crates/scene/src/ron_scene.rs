@@ -37,7 +37,7 @@ fn of(outer: &Option<String>) -> String {
 }
 
 /// Turns ron's error into expected/found at its start position.
-fn parse_error(src: &str, e: SpannedError) -> ParseError {
+pub(crate) fn parse_error(src: &str, e: SpannedError) -> ParseError {
     // Some of ron's spans start at the whitespace before the offending token.
     let (line, column) = skip_whitespace(src, e.span.start.line, e.span.start.col);
     let here = || text_at(src, line, column);

@@ -158,6 +158,10 @@ pub struct ModelOptions {
     pub bend_reaction: bool,
     pub row_direction: RowDirection,
     pub translation: TranslationMode,
+    /// Limit friction so that on its own it cannot reverse a velocity within one step:
+    /// |F_friction|·Δt/m ≤ |v| (spec S3.7 [EXT]). Off in the thesis; large steps need it, or friction
+    /// makes a resting particle chatter.
+    pub friction_clamp: bool,
 }
 
 impl ModelOptions {
@@ -171,6 +175,7 @@ impl ModelOptions {
             bend_reaction: false,
             row_direction: RowDirection::Down,
             translation: TranslationMode::Continuous,
+            friction_clamp: false,
         }
     }
 }

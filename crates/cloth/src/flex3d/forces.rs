@@ -123,7 +123,8 @@ pub(crate) fn add_bending_forces(s: &SurfaceForces, x: &[DVec3], f: &mut [DVec3]
 }
 
 /// Turns the resultant F' of a free particle into its acceleration, with friction (Nedel 1993 §3.2.7):
-/// literal: F = F' − μ|F'| v/|v|; viscous: F = F' − μ v. Returns a = F/m.
+/// literal: F = F' − μ|F'| v/|v|; viscous: F = F' − μ v. Returns a = F/m. With `clamp_dt = Some(Δt)`
+/// the friction force is limited to m|v|/Δt, so that it cannot reverse the velocity in one step.
 #[inline(always)]
 pub(crate) fn acceleration_with_friction(
     f: DVec3,
@@ -131,14 +132,27 @@ pub(crate) fn acceleration_with_friction(
     inv_mass: f64,
     mode: FrictionMode,
     mu: f64,
+    clamp_dt: Option<f64>,
 ) -> DVec3 {
-    let friction = match mode {
+    let mut friction = match mode {
         FrictionMode::Literal => {
             let speed2 = v.length_squared();
-            if speed2 == 0.0 || mu == 0.0 { DVec3::ZERO } else { v * (-mu * f.length() / speed2.sqrt()) }
+            if speed2 == 0.0 || mu == 0.0 {
+                DVec3::ZERO
+            } else {
+                // μ|F'|/|v| with one square root.
+                v * (-mu * (f.length_squared() / speed2).sqrt())
+            }
         }
         FrictionMode::Viscous => v * -mu,
     };
+    if let Some(dt) = clamp_dt {
+        let limit = v.length() / (inv_mass * dt);
+        let size = friction.length();
+        if size > limit {
+            friction *= limit / size;
+        }
+    }
     (f + friction) * inv_mass
 }
 
@@ -195,11 +209,22 @@ mod tests {
     fn friction_modes() {
         let f = DVec3::new(0.0, -10.0, 0.0);
         let v = DVec3::new(2.0, 0.0, 0.0);
-        let a = acceleration_with_friction(f, v, 0.5, FrictionMode::Literal, 0.5);
+        let a = acceleration_with_friction(f, v, 0.5, FrictionMode::Literal, 0.5, None);
         assert_eq!(a, DVec3::new(-2.5, -5.0, 0.0));
-        let a = acceleration_with_friction(f, v, 0.5, FrictionMode::Viscous, 0.5);
+        let a = acceleration_with_friction(f, v, 0.5, FrictionMode::Viscous, 0.5, None);
         assert_eq!(a, DVec3::new(-0.5, -5.0, 0.0));
-        let a = acceleration_with_friction(f, DVec3::ZERO, 1.0, FrictionMode::Literal, 0.5);
+        let a = acceleration_with_friction(f, DVec3::ZERO, 1.0, FrictionMode::Literal, 0.5, None);
+        assert_eq!(a, f);
+        // Clamped: friction on a slow particle stops it at most.
+        let a = acceleration_with_friction(
+            DVec3::ZERO,
+            DVec3::X * 0.01,
+            1.0,
+            FrictionMode::Viscous,
+            100.0,
+            Some(0.1),
+        );
+        assert!((a.x + 0.1).abs() < 1e-15, "{a}");
         assert_eq!(a, f);
     }
 }

@@ -7,4 +7,6 @@ pub mod mass_spring;
 mod world;
 
 pub use desc::*;
-pub use world::{BuildError, CollisionCounts, Diagnostics, Flex3dWorld, NonFiniteError, SurfaceInfo};
+pub use world::{
+    BuildError, CollisionCounts, Diagnostics, Flex3dWorld, NonFiniteError, StepError, SurfaceInfo,
+};

@@ -29,6 +29,15 @@ pub struct NonFiniteError {
     pub col: usize,
 }
 
+/// Why a step failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    #[error(transparent)]
+    NonFinite(#[from] NonFiniteError),
+    #[error("step {step} (t = {time} s): {source}")]
+    Solver { step: usize, time: f64, source: anima_ode::OdeError },
+}
+
 /// How many collision responses the run has applied, by partner kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct CollisionCounts {
@@ -86,7 +95,93 @@ struct Model {
     friction_mode: FrictionMode,
     friction: f64,
     bend_reaction: bool,
+    /// Δt when friction is clamped (spec S3.7 [EXT]).
+    friction_clamp: Option<f64>,
     n: usize,
+    /// Per-particle masses and the Hooke springs as a list, for implicit integration only (built when
+    /// the scene asks for an integrator that needs Jacobians).
+    masses: Vec<f64>,
+    springs: Vec<(u32, u32, f64, f64)>,
+    pattern: Vec<(u32, u32)>,
+}
+
+impl Model {
+    /// Lists every Hooke spring (i, j, k, L0) of every surface with its Jacobian pattern.
+    fn list_springs(&mut self) {
+        for s in &self.surfaces {
+            let (m, n, o) = (s.rows, s.cols, s.offset);
+            let rd = s.spacing * std::f64::consts::SQRT_2;
+            let [kh, kv, kd] = s.k;
+            for i in 0..m {
+                for j in 0..n {
+                    let p = o + i * n + j;
+                    let mut add = |q: usize, k: f64, l0: f64| {
+                        if k != 0.0 {
+                            self.springs.push((p as u32, q as u32, k, l0));
+                            self.pattern.push((p as u32, q as u32));
+                        }
+                    };
+                    if j + 1 < n {
+                        add(p + 1, kh, s.spacing);
+                    }
+                    if i + 1 < m {
+                        add(p + n, kv, s.spacing);
+                        if j + 1 < n {
+                            add(p + n + 1, kd, rd);
+                        }
+                        if j > 0 {
+                            add(p + n - 1, kd, rd);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// For implicit Euler: the force is the whole FLEX3D resultant (friction and angular springs included),
+/// and the Jacobian holds the Hooke springs exactly (geometric term clamped at zero so the system stays
+/// definite). Angular springs (no reaction, so not symmetric) and friction (not smooth) stay explicit.
+impl anima_ode::Linearized<DVec3> for Model {
+    fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    fn prescribed(&self) -> &[bool] {
+        &self.pinned
+    }
+
+    fn pattern(&self) -> &[(u32, u32)] {
+        &self.pattern
+    }
+
+    fn force_and_jacobians(
+        &mut self,
+        t: f64,
+        x: &[DVec3],
+        v: &[DVec3],
+        f: &mut [DVec3],
+        jac: &mut anima_ode::Jacobians<DVec3>,
+    ) {
+        self.acceleration(t, x, v, f);
+        for (fi, m) in f.iter_mut().zip(&self.masses) {
+            *fi *= *m;
+        }
+        for (e, &(i, j, k, l0)) in self.springs.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            let d = x[j] - x[i];
+            let l = d.length();
+            if l == 0.0 {
+                continue;
+            }
+            let n = d / l;
+            let nn = glam::DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+            let ks = nn * k + (glam::DMat3::IDENTITY - nn) * (k * (1.0 - l0 / l).max(0.0));
+            jac.k_diag[i] -= ks;
+            jac.k_diag[j] -= ks;
+            jac.k_off[e] += ks;
+        }
+    }
 }
 
 impl OdeSystem for Model {
@@ -94,6 +189,10 @@ impl OdeSystem for Model {
 
     fn n_coords(&self) -> usize {
         self.n
+    }
+
+    fn linearized(&mut self) -> Option<&mut dyn anima_ode::Linearized<DVec3>> {
+        if self.masses.is_empty() { None } else { Some(self) }
     }
 
     /// Resultant of gravity, external force, springs and angular springs, then friction (Nedel 1993 §3.2,
@@ -114,7 +213,14 @@ impl OdeSystem for Model {
                 *f = if pin {
                     DVec3::ZERO
                 } else {
-                    acceleration_with_friction(*f, vel, inv_mass, self.friction_mode, self.friction)
+                    acceleration_with_friction(
+                        *f,
+                        vel,
+                        inv_mass,
+                        self.friction_mode,
+                        self.friction,
+                        self.friction_clamp,
+                    )
                 };
             }
         }
@@ -254,8 +360,17 @@ impl Flex3dWorld {
             friction_mode: scene.friction.mode,
             friction: scene.friction.coefficient,
             bend_reaction: opts.bend_reaction,
+            friction_clamp: opts.friction_clamp.then_some(scene.dt_s),
             n,
+            masses: Vec::new(),
+            springs: Vec::new(),
+            pattern: Vec::new(),
         };
+        let mut model = model;
+        if scene.integrator.needs_jacobians() {
+            model.masses = mass.clone();
+            model.list_springs();
+        }
         let mut colliders = Colliders::default();
         if opts.collisions {
             for mesh in &objects {
@@ -339,22 +454,32 @@ impl Flex3dWorld {
 
     /// Advances one step of Δt with the scene's integrator: tentative state from the integrator, then
     /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4).
-    pub fn step(&mut self) -> Result<(), NonFiniteError> {
+    pub fn step(&mut self) -> Result<(), StepError> {
         let t = self.time();
-        self.stepper.step(&mut self.model, t, self.dt, &self.now, &mut self.next);
-        self.apply_constraints();
+        self.stepper
+            .step(&mut self.model, t, self.dt, &self.now, &mut self.next)
+            .map_err(|source| StepError::Solver { step: self.step + 1, time: t, source })?;
+        let constraints_changed = self.apply_constraints();
+        let hits_before = self.counts;
         if self.options.collisions && !self.colliders.corners.is_empty() {
             self.collide();
         }
+        // A multistep method's history no longer describes the motion after a velocity jump (spec
+        // S4.2.3: restart after any collision response or constraint discontinuity).
+        if constraints_changed || self.counts != hits_before {
+            self.stepper.reset_history();
+        }
         std::mem::swap(&mut self.now, &mut self.next);
         self.step += 1;
-        self.check_finite()
+        Ok(self.check_finite()?)
     }
 
     /// Pinned particles: x̃ = x + u·Δt, ṽ = u with u the sum of active translation velocities (spec S3.6).
     /// This runs before the collision pass so that a pinned collision partner already moves with its
     /// prescribed velocity; collisions never change a pinned particle.
-    fn apply_constraints(&mut self) {
+    /// Returns whether any pinned particle's velocity changed (a window opened or closed).
+    fn apply_constraints(&mut self) -> bool {
+        let mut changed = false;
         let s0 = self.step; // the step starting at t = s0·Δt
         for (pins, windows) in self.pinned_of_surface.iter().zip(&self.windows) {
             let mut u = DVec3::ZERO;
@@ -371,9 +496,11 @@ impl Flex3dWorld {
             }
             for &p in pins {
                 self.next.x[p] = self.now.x[p] + u * self.dt + jump;
+                changed |= self.now.v[p] != u || jump != DVec3::ZERO;
                 self.next.v[p] = u;
             }
         }
+        changed
     }
 
     /// The collision pass of spec S3.5.5 over all free particles in a fixed order (surface order, then
@@ -489,7 +616,7 @@ impl Flex3dWorld {
     }
 
     /// Steps until `steps_taken() == target` (no-op if already there or past it).
-    pub fn run_to_step(&mut self, target: usize) -> Result<(), NonFiniteError> {
+    pub fn run_to_step(&mut self, target: usize) -> Result<(), StepError> {
         while self.step < target {
             self.step()?;
         }

@@ -1,0 +1,183 @@
+//! Body scenes: a RON file naming a world, the models in it, the pose each holds and how long to run
+//! (`assets/scenes/stand.ron`). The `anima run` command reads them; skeleton files named by a scene
+//! are read by the caller (this crate does no file I/O).
+
+use serde::{Deserialize, Serialize};
+
+use crate::actuator::{CommandError, Signal, Target, TargetFrame};
+use crate::error::{BodyError, SkeletonError};
+use crate::ron_path;
+use crate::skeleton::{Actuation, BuiltinSkeleton, Skeleton, syntax_error};
+use crate::world::{Placement, World, WorldSettings};
+
+/// Errors in a scene file: the same shape as skeleton errors (line, field, message).
+pub type SceneError = SkeletonError;
+
+/// Where a model's skeleton comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum SkeletonSource {
+    /// A skeleton file, relative to the scene file's folder.
+    File(String),
+    /// One of the shipped skeletons.
+    Builtin(BuiltinSkeleton),
+}
+
+/// The targets a model holds for the whole run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Pose {
+    /// Every actuator holds angle 0: the initial configuration (Fig. 6.4).
+    Initial,
+    /// No signals: every actuator limp (ODE-style brakes stay on).
+    Limp,
+    /// The named actuators hold these angles (rad), every other one 0.
+    Angles(Vec<(String, f64)>),
+}
+
+/// One model of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Model", deny_unknown_fields)]
+pub struct ModelEntry {
+    pub skeleton: SkeletonSource,
+    pub placement: Placement,
+    /// Replaces the skeleton's own actuation settings.
+    #[serde(default)]
+    pub actuation: Option<Actuation>,
+    pub pose: Pose,
+}
+
+/// A scene of articulated figures.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "BodyScene", deny_unknown_fields)]
+pub struct BodyScene {
+    pub name: String,
+    /// Simulated time, seconds.
+    pub duration: f64,
+    /// Seconds between rendered frames.
+    pub frame_interval: f64,
+    pub world: WorldSettings,
+    pub models: Vec<ModelEntry>,
+}
+
+impl BodyScene {
+    /// Whether `text`'s top-level value is a `BodyScene(…)` (comments and blank space skipped). The
+    /// `anima` command uses this to tell body scenes from its other RON scenes without parsing twice.
+    pub fn is_body_scene(text: &str) -> bool {
+        let mut rest = text;
+        loop {
+            rest = rest.trim_start();
+            if let Some(r) = rest.strip_prefix("//") {
+                rest = r.split_once('\n').map_or("", |(_, r)| r);
+            } else if let Some(r) = rest.strip_prefix("/*") {
+                rest = r.split_once("*/").map_or("", |(_, r)| r);
+            } else if let Some(r) = rest.strip_prefix("#![") {
+                // ron extension attributes, e.g. #![enable(implicit_some)]
+                rest = r.split_once(']').map_or("", |(_, r)| r);
+            } else {
+                break;
+            }
+        }
+        rest.strip_prefix("BodyScene").is_some_and(|r| r.trim_start().starts_with('('))
+    }
+
+    /// Parses and checks a scene. Errors name the line and the field.
+    pub fn from_ron_str(text: &str) -> Result<Self, SceneError> {
+        let scene: BodyScene = ron::from_str(text).map_err(|e| syntax_error(text, &e))?;
+        scene.check().map_err(|mut e| {
+            e.line = ron_path::line_of(text, &e.field);
+            e
+        })?;
+        Ok(scene)
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
+        let bad = |f: &str, m: String| Err(SkeletonError::invalid(f, m));
+        if !(self.duration > 0.0 && self.duration.is_finite()) {
+            return bad(
+                "duration",
+                format!("expected a positive number of seconds, found {}", self.duration),
+            );
+        }
+        if !(self.frame_interval > 0.0 && self.frame_interval.is_finite()) {
+            return bad(
+                "frame_interval",
+                format!("expected a positive number of seconds, found {}", self.frame_interval),
+            );
+        }
+        if !(self.world.dt > 0.0 && self.world.dt.is_finite()) {
+            return bad(
+                "world.dt",
+                format!("expected a positive number of seconds, found {}", self.world.dt),
+            );
+        }
+        if self.world.substeps == 0 {
+            return bad("world.substeps", "expected at least 1".into());
+        }
+        if self.models.is_empty() {
+            return bad("models", "a scene needs at least one model".into());
+        }
+        Ok(())
+    }
+
+    /// Number of control steps: ⌈duration / Δt⌉ (rounded to the nearest step when within 1e-9).
+    pub fn n_steps(&self) -> u64 {
+        let r = self.duration / self.world.dt;
+        let n = r.round();
+        (if (r - n).abs() < 1e-9 { n } else { r.ceil() }) as u64
+    }
+
+    /// Builds the world with `skeletons[i]` for model i (the caller resolves [`SkeletonSource`]s; see
+    /// [`BodyScene::builtin_skeleton`]) and sets each model's pose.
+    pub fn build(&self, skeletons: &[Skeleton]) -> Result<World, BodyError> {
+        if skeletons.len() != self.models.len() {
+            return Err(BodyError::Layout {
+                what: "skeleton list",
+                expected: self.models.len(),
+                found: skeletons.len(),
+            });
+        }
+        let mut world = World::new(self.world)?;
+        for (entry, sk) in self.models.iter().zip(skeletons) {
+            let sk = match entry.actuation {
+                Some(a) => sk.with_actuation(a)?,
+                None => sk.clone(),
+            };
+            let model = world.add_model(&sk, entry.placement)?;
+            let commands = world.commands_mut(model)?;
+            commands.clear();
+            match &entry.pose {
+                Pose::Limp => {}
+                Pose::Initial => commands.hold(&vec![0.0; sk.n_actuators()])?,
+                Pose::Angles(named) => {
+                    let mut angles = vec![0.0; sk.n_actuators()];
+                    for (name, angle) in named {
+                        let a = sk.actuator_index(name).ok_or_else(|| BodyError::NoSuchName {
+                            model: sk.name().into(),
+                            what: "actuator",
+                            name: name.clone(),
+                        })?;
+                        angles[a] = *angle;
+                    }
+                    for (actuator, &angle) in angles.iter().enumerate() {
+                        commands
+                            .push(Signal {
+                                actuator,
+                                target: Target::Angle(angle),
+                                frame: TargetFrame::Parent,
+                                weight: 1.0,
+                            })
+                            .map_err(|e: CommandError| BodyError::from(e))?;
+                    }
+                }
+            }
+        }
+        Ok(world)
+    }
+
+    /// The skeleton of a builtin source, `None` for a file.
+    pub fn builtin_skeleton(source: &SkeletonSource) -> Option<Skeleton> {
+        match source {
+            SkeletonSource::Builtin(b) => Some(b.load()),
+            SkeletonSource::File(_) => None,
+        }
+    }
+}

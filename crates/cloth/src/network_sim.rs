@@ -1,0 +1,253 @@
+//! Running a [`SpringNetwork`] with any integrator, with analytic static colliders resolved after each
+//! step (a split: the integrator steps the smooth forces, then contacts project positions and remove the
+//! approaching normal velocity, with Coulomb friction on the tangential part).
+
+use anima_geom::DVec3;
+use anima_ode::{Integrator, OdeError, State, StepStats, Stepper};
+
+use crate::spring_net::SpringNetwork;
+
+/// A static obstacle given analytically.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Collider {
+    /// The half-space below the plane through `point` with outward `normal`.
+    Plane {
+        point: DVec3,
+        normal: DVec3,
+    },
+    Sphere {
+        centre: DVec3,
+        radius: f64,
+    },
+    /// An axis-aligned box.
+    Box {
+        min: DVec3,
+        max: DVec3,
+    },
+}
+
+impl Collider {
+    /// Where the path `from → to` first enters the collider (grown by `margin`), with the outward normal
+    /// there, when `from` is outside. Fast particles are caught at their entry point, not pushed out
+    /// through whichever face is nearest after they have tunnelled deep inside.
+    pub fn entry(&self, from: DVec3, to: DVec3, margin: f64) -> Option<(DVec3, DVec3)> {
+        if self.push_out(from, margin).is_some() || self.push_out(to, margin).is_none() {
+            return None;
+        }
+        let d = to - from;
+        match *self {
+            Collider::Plane { point, normal } => {
+                let n = normal.normalize();
+                let (a, b) = ((from - point).dot(n) - margin, d.dot(n));
+                (b < 0.0).then(|| (from + d * (-a / b), n))
+            }
+            Collider::Sphere { centre, radius } => {
+                let r = radius + margin;
+                let f = from - centre;
+                let (a, b, c) = (d.dot(d), 2.0 * f.dot(d), f.dot(f) - r * r);
+                let disc = b * b - 4.0 * a * c;
+                (disc >= 0.0 && a > 0.0).then(|| {
+                    let s = ((-b - disc.sqrt()) / (2.0 * a)).clamp(0.0, 1.0);
+                    let q = from + d * s;
+                    (q, (q - centre).normalize_or(DVec3::Z))
+                })
+            }
+            Collider::Box { min, max } => {
+                let (lo, hi) = (min - DVec3::splat(margin), max + DVec3::splat(margin));
+                // Slab method: the entry parameter is the largest of the per-axis entry parameters.
+                let (mut s_in, mut axis) = (0.0f64, 0usize);
+                for k in 0..3 {
+                    if d[k] != 0.0 {
+                        let (t0, t1) = ((lo[k] - from[k]) / d[k], (hi[k] - from[k]) / d[k]);
+                        let enter = t0.min(t1);
+                        if enter > s_in {
+                            s_in = enter;
+                            axis = k;
+                        }
+                    }
+                }
+                let q = from + d * s_in;
+                let mut n = DVec3::ZERO;
+                n[axis] = if d[axis] > 0.0 { -1.0 } else { 1.0 };
+                Some((q, n))
+            }
+        }
+    }
+
+    /// If `p` is inside (or closer than `margin`), the nearest point on the surface pushed out by the
+    /// margin, and the outward normal there.
+    pub fn push_out(&self, p: DVec3, margin: f64) -> Option<(DVec3, DVec3)> {
+        match *self {
+            Collider::Plane { point, normal } => {
+                let n = normal.normalize();
+                let d = (p - point).dot(n);
+                (d < margin).then(|| (p + n * (margin - d), n))
+            }
+            Collider::Sphere { centre, radius } => {
+                let r = p - centre;
+                let d = r.length();
+                if d >= radius + margin {
+                    return None;
+                }
+                let n = if d > 0.0 { r / d } else { DVec3::Z };
+                Some((centre + n * (radius + margin), n))
+            }
+            Collider::Box { min, max } => {
+                let (lo, hi) = (min - DVec3::splat(margin), max + DVec3::splat(margin));
+                if p.cmple(lo).any() || p.cmpge(hi).any() {
+                    return None;
+                }
+                // Leave through the nearest face.
+                let dists = [p.x - lo.x, hi.x - p.x, p.y - lo.y, hi.y - p.y, p.z - lo.z, hi.z - p.z];
+                let (face, _) = dists
+                    .iter()
+                    .enumerate()
+                    .fold((0, f64::INFINITY), |b, (k, &d)| if d < b.1 { (k, d) } else { b });
+                let mut q = p;
+                let n = match face {
+                    0 => {
+                        q.x = lo.x;
+                        -DVec3::X
+                    }
+                    1 => {
+                        q.x = hi.x;
+                        DVec3::X
+                    }
+                    2 => {
+                        q.y = lo.y;
+                        -DVec3::Y
+                    }
+                    3 => {
+                        q.y = hi.y;
+                        DVec3::Y
+                    }
+                    4 => {
+                        q.z = lo.z;
+                        -DVec3::Z
+                    }
+                    _ => {
+                        q.z = hi.z;
+                        DVec3::Z
+                    }
+                };
+                Some((q, n))
+            }
+        }
+    }
+}
+
+/// A network, its integrator, its double-buffered state and its colliders.
+#[derive(Debug)]
+pub struct NetworkSim {
+    pub network: SpringNetwork,
+    stepper: Stepper<DVec3>,
+    pub state: State<DVec3>,
+    scratch: State<DVec3>,
+    pub colliders: Vec<Collider>,
+    /// Friction coefficient of every contact.
+    pub friction: f64,
+    /// Contacts keep particles this far outside colliders, m.
+    pub margin: f64,
+    step: usize,
+    dt: f64,
+    pub stats: StepStats,
+}
+
+impl NetworkSim {
+    pub fn new(network: SpringNetwork, x: Vec<DVec3>, integrator: Integrator, dt: f64) -> Self {
+        let n = network.n_particles();
+        assert_eq!(x.len(), n, "one position per particle");
+        Self {
+            stepper: Stepper::new(integrator, n),
+            state: State::new(x, vec![DVec3::ZERO; n]),
+            scratch: State::zeros(n),
+            network,
+            colliders: Vec::new(),
+            friction: 0.0,
+            margin: 1e-3,
+            step: 0,
+            dt,
+            stats: StepStats::default(),
+        }
+    }
+
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+
+    pub fn steps_taken(&self) -> usize {
+        self.step
+    }
+
+    pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
+        &mut self.stepper
+    }
+
+    /// One step: integrate, then resolve contacts.
+    pub fn step(&mut self) -> Result<(), OdeError> {
+        let t = self.time();
+        let s = self.stepper.step(&mut self.network, t, self.dt, &self.state, &mut self.scratch)?;
+        self.stats.evaluations += s.evaluations;
+        self.stats.solver_iterations += s.solver_iterations;
+        std::mem::swap(&mut self.state, &mut self.scratch);
+        if !self.colliders.is_empty() && self.resolve_contacts() {
+            self.stepper.reset_history();
+        }
+        self.step += 1;
+        Ok(())
+    }
+
+    /// Runs `n` steps, stopping at the first non-finite state; returns the step where it appeared.
+    pub fn run(&mut self, n: usize) -> Result<(), RunError> {
+        for _ in 0..n {
+            self.step().map_err(|e| RunError::Solver { step: self.step + 1, source: e })?;
+            if let Some(particle) = self.state.first_non_finite() {
+                return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+            }
+        }
+        Ok(())
+    }
+
+    /// Pushes particles out of colliders (at their entry point when they crossed the surface during the
+    /// step), sets their velocity to the displacement the contact allowed, removes its approaching normal
+    /// part and applies Coulomb friction to the tangential part (|Δv_t| ≤ μ |Δv_n|). Returns whether any
+    /// contact was found.
+    fn resolve_contacts(&mut self) -> bool {
+        let mut any = false;
+        let pinned = self.network.pinned();
+        for p in 0..self.state.x.len() {
+            if pinned[p] {
+                continue;
+            }
+            let from = self.scratch.x[p];
+            for c in &self.colliders {
+                let contact = c
+                    .entry(from, self.state.x[p], self.margin)
+                    .or_else(|| c.push_out(self.state.x[p], self.margin));
+                if let Some((q, n)) = contact {
+                    any = true;
+                    self.state.x[p] = q;
+                    // The velocity becomes the motion the contact allowed over the step, so that a
+                    // particle held at an edge does not keep a velocity into the obstacle; then the
+                    // approaching normal part goes and friction acts on the tangential part.
+                    let v = (q - from) * (1.0 / self.dt);
+                    let vn = v.dot(n).min(0.0);
+                    let vt = v - n * v.dot(n);
+                    let st = vt.length();
+                    let scale = if st > 0.0 { (1.0 - self.friction * (-vn) / st).max(0.0) } else { 0.0 };
+                    self.state.v[p] = vt * scale + n * v.dot(n).max(0.0);
+                }
+            }
+        }
+        any
+    }
+}
+
+/// Why a network run stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    #[error("non-finite state at step {step} (t = {time} s), particle {particle}")]
+    NonFinite { step: usize, time: f64, particle: usize },
+    #[error("step {step}: {source}")]
+    Solver { step: usize, source: OdeError },
+}

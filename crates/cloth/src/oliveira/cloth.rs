@@ -1,0 +1,506 @@
+//! A cloth on a fixed triangle mesh stepped the way Oliveira 2013 does it (Fig. 4.1): the dynamic step
+//! of Eq. 4.6, an RK4 step of the non-contact forces, then the path test and collision response.
+
+use std::f64::consts::PI;
+
+use anima_geom::query::HalfSpace;
+use anima_geom::{
+    Aabb, Cylinder, DVec2, DVec3, MaterialMesh, MaterialMeshError, MeshSolid, Solid, Sphere, TriangleMesh,
+};
+use anima_ode::{OdeError, State, Stepper};
+
+use super::bending::BendingElements;
+use super::contact::{Collider, contact_velocity};
+use super::forces::ClothModel;
+use super::material::Material;
+use super::scene::{Centre, ContactVelocity, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
+use super::springs::Springs;
+
+/// Why a scene could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    #[error("scene: `{field}` {message}")]
+    Field { field: &'static str, message: String },
+    #[error("object `{name}`: {message}")]
+    Object { name: String, message: String },
+    #[error("the scene names {expected} mesh objects but {given} meshes were given")]
+    MeshCount { expected: usize, given: usize },
+    #[error("cloth mesh: {0}")]
+    Mesh(#[from] MaterialMeshError),
+    #[error("cloth particle {vertex} starts inside object `{object}`")]
+    StartsInside { vertex: usize, object: String },
+}
+
+/// Why a step could not be completed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    #[error("non-finite state at step {step} (t = {time} s): particle {vertex}")]
+    NonFinite { step: u64, time: f64, vertex: usize },
+    #[error(transparent)]
+    Ode(#[from] OdeError),
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// The step just taken, s.
+    pub dt: f64,
+    /// Particles whose path met an object.
+    pub hits: usize,
+}
+
+/// The cloth, its objects and its state.
+#[derive(Debug)]
+pub struct OliveiraCloth {
+    mesh: MaterialMesh,
+    model: ClothModel,
+    stepper: Stepper<DVec3>,
+    now: State<DVec3>,
+    next: State<DVec3>,
+    colliders: Vec<Collider>,
+    /// Per particle, a lower bound on its distance from every surface (see `Options::cull_collision_tests`).
+    clearance: Vec<f64>,
+    material: Material,
+    restitution: f64,
+    rule: StepRule,
+    options: Options,
+    m_min: f64,
+    k_max: f64,
+    tracked: usize,
+    time: f64,
+    steps: u64,
+    first_collision: Option<f64>,
+    total_hits: u64,
+}
+
+fn field(field: &'static str, message: impl Into<String>) -> BuildError {
+    BuildError::Field { field, message: message.into() }
+}
+
+fn finite_positive(name: &'static str, v: f64) -> Result<(), BuildError> {
+    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(field(name, format!("must be positive, got {v}"))) }
+}
+
+/// The rotation that takes a file's `up` axis to +z (a proper rotation, so triangle winding is kept).
+fn to_z_up(up: UpAxis, p: DVec3) -> DVec3 {
+    match up {
+        UpAxis::X => DVec3::new(-p.z, p.y, p.x),
+        UpAxis::Y => DVec3::new(p.x, -p.z, p.y),
+        UpAxis::Z => p,
+    }
+}
+
+/// A mesh rotated to z up, scaled to `length` along its longest horizontal side and stood with the
+/// centre of its bounding box's bottom at `base_centre`.
+pub fn place_mesh(
+    mesh: &TriangleMesh,
+    up: UpAxis,
+    length: f64,
+    base_centre: DVec3,
+) -> Result<TriangleMesh, String> {
+    let rotated: Vec<DVec3> = mesh.vertices().iter().map(|&p| to_z_up(up, p)).collect();
+    let b = Aabb::from_points(rotated.iter().copied());
+    let extent = b.size().x.max(b.size().y);
+    if !(extent > 0.0) {
+        return Err("the mesh has no horizontal extent".to_owned());
+    }
+    let scale = length / extent;
+    let bottom = DVec3::new(b.centre().x, b.centre().y, b.min.z);
+    let placed = rotated.iter().map(|&p| base_centre + (p - bottom) * scale).collect();
+    TriangleMesh::new(placed, mesh.triangles().to_vec()).map_err(|e| e.to_string())
+}
+
+fn build_collider(
+    desc: &super::scene::ObjectDesc,
+    meshes: &mut impl Iterator<Item = TriangleMesh>,
+) -> Result<Collider, BuildError> {
+    let err = |message: String| BuildError::Object { name: desc.name.clone(), message };
+    if !(desc.friction.is_finite() && desc.friction >= 0.0) {
+        return Err(err(format!("friction must be non-negative, got {}", desc.friction)));
+    }
+    let positive = |what: &str, v: f64| {
+        if v.is_finite() && v > 0.0 { Ok(()) } else { Err(err(format!("{what} must be positive, got {v}"))) }
+    };
+    let finite = |what: &str, v: DVec3| {
+        if v.is_finite() { Ok(()) } else { Err(err(format!("{what} must be finite"))) }
+    };
+    let solid = match &desc.shape {
+        ShapeDesc::Mesh { file, up, length_m, base_centre_m } => {
+            positive("length_m", *length_m)?;
+            finite("base_centre_m", *base_centre_m)?;
+            let raw = meshes.next().ok_or_else(|| err(format!("no mesh was loaded for `{file}`")))?;
+            let placed = place_mesh(&raw, *up, *length_m, *base_centre_m).map_err(err)?;
+            Solid::Mesh(MeshSolid::new(&placed).map_err(|e| err(format!("`{file}`: {e}")))?)
+        }
+        ShapeDesc::Sphere { centre_m, radius_m } => {
+            positive("radius_m", *radius_m)?;
+            finite("centre_m", *centre_m)?;
+            Solid::Sphere(Sphere { centre: *centre_m, radius: *radius_m })
+        }
+        ShapeDesc::Cylinder { base_centre_m, radius_m, height_m } => {
+            positive("radius_m", *radius_m)?;
+            positive("height_m", *height_m)?;
+            finite("base_centre_m", *base_centre_m)?;
+            Solid::Cylinder(Cylinder { base_centre: *base_centre_m, radius: *radius_m, height: *height_m })
+        }
+        ShapeDesc::HalfSpace { point_m, normal } => {
+            finite("point_m", *point_m)?;
+            Solid::HalfSpace(
+                HalfSpace::new(*point_m, *normal)
+                    .ok_or_else(|| err("normal must be non-zero and finite".into()))?,
+            )
+        }
+    };
+    Ok(Collider { name: desc.name.clone(), solid, friction: desc.friction })
+}
+
+impl OliveiraCloth {
+    /// Builds the cloth of `scene` at rest, with its objects. `meshes` are the loaded files of the
+    /// scene's `Mesh` objects, in the order the scene lists them.
+    pub fn new(scene: &OliveiraScene, meshes: Vec<TriangleMesh>) -> Result<Self, BuildError> {
+        finite_positive("duration_s", scene.duration_s)?;
+        if !scene.gravity_m_s2.is_finite() {
+            return Err(field("gravity_m_s2", "must be finite"));
+        }
+        if !(0.0..=1.0).contains(&scene.restitution) {
+            return Err(field("restitution", format!("must lie in [0, 1], got {}", scene.restitution)));
+        }
+        if let Some(name) = scene.material.invalid_field() {
+            return Err(field("material", format!("field `{name}` is out of range")));
+        }
+        match scene.time_step {
+            StepRule::Provot { beta, startup_dt_s } => {
+                finite_positive("time_step.beta", beta)?;
+                if let Some(dt) = startup_dt_s {
+                    finite_positive("time_step.startup_dt_s", dt)?;
+                }
+            }
+            StepRule::Fixed { dt_s } => finite_positive("time_step.dt_s", dt_s)?,
+        }
+        let c = &scene.cloth;
+        finite_positive("cloth.size_m", c.size_m)?;
+        let n = c.vertices_per_side;
+        let (row, col) = c.tracked_vertex;
+        if row >= n || col >= n {
+            return Err(field(
+                "cloth.tracked_vertex",
+                format!("({row}, {col}) is outside the {n} × {n} grid"),
+            ));
+        }
+
+        let expected = scene.objects.iter().filter(|o| matches!(o.shape, ShapeDesc::Mesh { .. })).count();
+        if expected != meshes.len() {
+            return Err(BuildError::MeshCount { expected, given: meshes.len() });
+        }
+        let mut meshes = meshes.into_iter();
+        let colliders =
+            scene.objects.iter().map(|o| build_collider(o, &mut meshes)).collect::<Result<Vec<_>, _>>()?;
+
+        let mesh = MaterialMesh::grid(n, c.size_m, c.diagonals)?;
+        let z0 = match c.height {
+            Height::At { z_m } if z_m.is_finite() => z_m,
+            Height::AboveObjects { clearance_m } if clearance_m.is_finite() && clearance_m >= 0.0 => {
+                let top = colliders
+                    .iter()
+                    .map(|o| o.solid.aabb().max.z)
+                    .filter(|z| z.is_finite())
+                    .fold(f64::NEG_INFINITY, f64::max);
+                if top == f64::NEG_INFINITY {
+                    return Err(field("cloth.height", "AboveObjects needs at least one bounded object"));
+                }
+                top + clearance_m
+            }
+            _ => return Err(field("cloth.height", "must be finite (and the clearance non-negative)")),
+        };
+        let half = DVec2::splat(c.size_m / 2.0);
+        let centre = match c.centre {
+            Centre::At(xy) if xy.is_finite() => xy,
+            Centre::At(_) => return Err(field("cloth.centre", "must be finite")),
+            Centre::OverHighestPoint => colliders
+                .iter()
+                .filter_map(|o| o.solid.highest_point())
+                .reduce(|a, b| if b.z > a.z { b } else { a })
+                .ok_or_else(|| field("cloth.centre", "OverHighestPoint needs at least one bounded object"))?
+                .truncate(),
+        };
+        let origin = (centre - half).extend(z0);
+        let x = mesh.place(origin, DVec3::X, DVec3::Y);
+        for (vertex, p) in x.iter().enumerate() {
+            if let Some(o) = colliders.iter().find(|o| o.solid.contains(*p)) {
+                return Err(BuildError::StartsInside { vertex, object: o.name.clone() });
+            }
+        }
+
+        let material = scene.material;
+        let areas = mesh.vertex_areas();
+        let mass: Vec<f64> = areas.iter().map(|&a| material.particle_mass(a)).collect();
+        let rest_length = mesh.edge_rest_lengths();
+        let springs = Springs {
+            ends: mesh.topology().edges().iter().map(|e| e.vertices).collect(),
+            stiffness: rest_length.iter().map(|&l| material.spring_stiffness(l)).collect(),
+            damping: rest_length.iter().map(|&l| material.spring_damping(l)).collect(),
+            rest_length,
+        };
+        let bending = BendingElements {
+            stencils: mesh.topology().interior_stencils().iter().map(|s| s.vertices).collect(),
+        };
+        let m_min = mass.iter().copied().fold(f64::INFINITY, f64::min);
+        let k_max = springs.max_stiffness();
+        let model = ClothModel {
+            inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
+            weight: mass.iter().map(|&m| scene.gravity_m_s2 * m).collect(),
+            drag: areas.iter().map(|&a| material.particle_drag(a)).collect(),
+            mass,
+            springs,
+            bending,
+            bending_stiffness: material.bending_stiffness,
+            bending_damping: material.bending_damping,
+            spring_law: scene.options.spring,
+            damper_law: scene.options.damper,
+        };
+        let n_vertices = x.len();
+        Ok(Self {
+            stepper: Stepper::new(scene.integrator, n_vertices),
+            now: State::new(x, vec![DVec3::ZERO; n_vertices]),
+            next: State::zeros(n_vertices),
+            clearance: vec![0.0; n_vertices],
+            colliders,
+            material,
+            restitution: scene.restitution,
+            rule: scene.time_step,
+            options: scene.options,
+            m_min,
+            k_max,
+            tracked: row * n + col,
+            time: 0.0,
+            steps: 0,
+            first_collision: None,
+            total_hits: 0,
+            mesh,
+            model,
+        })
+    }
+
+    /// The step the next call to [`OliveiraCloth::step`] will take: the start-up step until the first
+    /// collision, then Δt = β·π·√(m_min / k^e_max) (Eq. 4.6).
+    pub fn next_dt(&self) -> f64 {
+        match self.rule {
+            StepRule::Provot { startup_dt_s: Some(dt), .. } if self.first_collision.is_none() => dt,
+            StepRule::Provot { beta, .. } => beta * PI * (self.m_min / self.k_max).sqrt(),
+            StepRule::Fixed { dt_s } => dt_s,
+        }
+    }
+
+    /// One step (Fig. 4.1): integrate the non-contact forces, then test every particle's path and answer
+    /// hits (Eqs. 4.16–4.18).
+    pub fn step(&mut self) -> Result<StepReport, StepError> {
+        let dt = self.next_dt();
+        self.stepper.step(&mut self.model, self.time, dt, &self.now, &mut self.next)?;
+        let hits = respond_to_hits(
+            &self.colliders,
+            &self.now,
+            &mut self.next,
+            &mut self.clearance,
+            dt,
+            self.restitution,
+            self.material.friction,
+            &self.options,
+        );
+        if hits > 0 {
+            self.first_collision.get_or_insert(self.time + dt);
+            self.total_hits += hits as u64;
+            // A multistep method's history no longer describes the state.
+            self.stepper.reset_history();
+        }
+        if let Some(vertex) =
+            (0..self.next.x.len()).find(|&i| !(self.next.x[i].is_finite() && self.next.v[i].is_finite()))
+        {
+            return Err(StepError::NonFinite { step: self.steps + 1, time: self.time + dt, vertex });
+        }
+        std::mem::swap(&mut self.now, &mut self.next);
+        self.time += dt;
+        self.steps += 1;
+        Ok(StepReport { dt, hits })
+    }
+
+    /// Steps until the time reaches `t_end` (the last step may pass it, as the thesis's loop does).
+    pub fn run_until(&mut self, t_end: f64) -> Result<(), StepError> {
+        while self.time < t_end {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    pub fn mesh(&self) -> &MaterialMesh {
+        &self.mesh
+    }
+
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        self.mesh.triangles()
+    }
+
+    pub fn positions(&self) -> &[DVec3] {
+        &self.now.x
+    }
+
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.now.v
+    }
+
+    pub fn masses(&self) -> &[f64] {
+        &self.model.mass
+    }
+
+    pub fn springs(&self) -> &Springs {
+        &self.model.springs
+    }
+
+    pub fn bending(&self) -> &BendingElements {
+        &self.model.bending
+    }
+
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// m_min, kg.
+    pub fn min_mass(&self) -> f64 {
+        self.m_min
+    }
+
+    /// k^e_max, N/m.
+    pub fn max_stiffness(&self) -> f64 {
+        self.k_max
+    }
+
+    /// The time at the end of the first step with a collision.
+    pub fn first_collision_time(&self) -> Option<f64> {
+        self.first_collision
+    }
+
+    /// Collision responses applied so far.
+    pub fn total_hits(&self) -> u64 {
+        self.total_hits
+    }
+
+    /// Index of particle P.
+    pub fn tracked_vertex(&self) -> usize {
+        self.tracked
+    }
+
+    pub fn tracked_position(&self) -> DVec3 {
+        self.now.x[self.tracked]
+    }
+
+    pub fn kinetic_energy(&self) -> f64 {
+        self.now.v.iter().zip(&self.model.mass).map(|(v, m)| 0.5 * m * v.length_squared()).sum()
+    }
+
+    pub fn max_speed(&self) -> f64 {
+        self.now.v.iter().map(|v| v.length()).fold(0.0, f64::max)
+    }
+
+    /// Particles strictly inside an object, with the object's index.
+    pub fn penetrations(&self) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for (i, p) in self.now.x.iter().enumerate() {
+            if let Some(k) = self.colliders.iter().position(|o| o.solid.contains(*p)) {
+                out.push((i, k));
+            }
+        }
+        out
+    }
+
+    /// The force model, e.g. to evaluate forces at a given state.
+    pub fn model(&self) -> &ClothModel {
+        &self.model
+    }
+}
+
+/// The first crossing of the segment a → b with any object: (path parameter, unit outward normal,
+/// object index), ties going to the earlier object.
+fn first_hit(colliders: &[Collider], a: DVec3, b: DVec3) -> Option<(f64, DVec3, usize)> {
+    let mut first: Option<(f64, DVec3, usize)> = None;
+    for (k, o) in colliders.iter().enumerate() {
+        if let Some(hit) = o.solid.segment_hit(a, b)
+            && first.is_none_or(|(s, _, _)| hit.s < s)
+        {
+            first = Some((hit.s, hit.normal, k));
+        }
+    }
+    first
+}
+
+/// How many times a corrected path is re-tested before the particle is held where it started.
+const MAX_RECHECKS: usize = 3;
+
+/// Casts each particle's path over the step against every object and answers the first hit with
+/// Eqs. 4.16–4.18. With `Options::recheck_corrected_path`, the corrected path x^t → x̄ is cast again
+/// and answered the same way (up to [`MAX_RECHECKS`] times; then the particle stays at x^t at rest).
+/// Returns the number of particles hit.
+#[expect(clippy::too_many_arguments, reason = "disjoint borrows of the cloth's fields")]
+fn respond_to_hits(
+    colliders: &[Collider],
+    now: &State<DVec3>,
+    next: &mut State<DVec3>,
+    clearance: &mut [f64],
+    dt: f64,
+    restitution: f64,
+    cloth_friction: f64,
+    options: &Options,
+) -> usize {
+    if colliders.is_empty() {
+        return 0;
+    }
+    let mut hits = 0;
+    for i in 0..now.x.len() {
+        let (a, b) = (now.x[i], next.x[i]);
+        let path = a.distance(b);
+        if options.cull_collision_tests && path < clearance[i] {
+            clearance[i] -= path;
+            continue;
+        }
+        let Some((_, mut normal, mut k)) = first_hit(colliders, a, b) else {
+            if options.cull_collision_tests {
+                // A little less than the distance, so round-off in it cannot let a path through.
+                let d = colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
+                clearance[i] = d * (1.0 - 1e-9) - 1e-12;
+            }
+            continue;
+        };
+        let mut v = match options.contact_velocity {
+            ContactVelocity::StartOfStep => now.v[i],
+            ContactVelocity::EndOfStep => next.v[i],
+        };
+        let mut x = a;
+        for attempt in 0..=MAX_RECHECKS {
+            let mu = 0.5 * (cloth_friction + colliders[k].friction);
+            v = contact_velocity(v, normal, restitution, mu, options.separating);
+            x = a + v * dt;
+            if !options.recheck_corrected_path {
+                break;
+            }
+            match first_hit(colliders, a, x) {
+                None => break,
+                Some(_) if attempt == MAX_RECHECKS => {
+                    // Wedged in a crease: every corrected path crosses a surface.
+                    (x, v) = (a, DVec3::ZERO);
+                }
+                Some((_, n, obj)) => (normal, k) = (n, obj),
+            }
+        }
+        next.v[i] = v;
+        next.x[i] = x;
+        clearance[i] = 0.0;
+        hits += 1;
+    }
+    hits
+}

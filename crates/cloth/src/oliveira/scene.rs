@@ -1,0 +1,217 @@
+//! An Oliveira drape as data: the cloth, its material, the time-step rule, the static objects, and a
+//! switch for every reconstruction the spec marks. This is also the schema of the RON scene files in
+//! `assets/oliveira/`.
+
+use anima_geom::{DVec2, DVec3, DiagonalPattern};
+use anima_ode::Integrator;
+use serde::{Deserialize, Serialize};
+
+use super::material::Material;
+
+/// Gravity in every Oliveira test: (0, 0, −9.81) m/s², z up (Tables 5.1, 5.3, 5.5).
+pub const OLIVEIRA_GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.81);
+
+/// The start-up step of Tests I and II (Oliveira 2013 §5.2.1, §5.3.1), used until the first collision.
+pub const STARTUP_DT_S: f64 = 1.0e-4;
+
+/// A whole scene. Units are SI; z is up.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OliveiraScene {
+    /// Simulated time, s. The thesis states 0.6 s for Test III only; the spec infers 0.5 s (Test I) and
+    /// 1 s (Test II) from the snapshot times.
+    pub duration_s: f64,
+    pub gravity_m_s2: DVec3,
+    pub cloth: ClothDesc,
+    pub material: Material,
+    pub time_step: StepRule,
+    /// γ of Eq. 4.16, the tables' "damping factor (k)": the normal velocity after a hit is −γ times the
+    /// one before.
+    pub restitution: f64,
+    pub objects: Vec<ObjectDesc>,
+    /// The thesis ran classical RK4 (§4.2).
+    #[serde(default = "default_integrator")]
+    pub integrator: Integrator,
+    #[serde(default = "Options::thesis")]
+    pub options: Options,
+}
+
+fn default_integrator() -> Integrator {
+    Integrator::Rk4
+}
+
+/// The square cloth: a regular grid in material space, laid flat and horizontal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClothDesc {
+    /// N of the N × N-vertex grid (5 coarse, 17 fine in the thesis).
+    pub vertices_per_side: usize,
+    /// Side of the square, m (1 m in every test).
+    pub size_m: f64,
+    /// How each grid square is split (not stated by the thesis; spec A-3).
+    #[serde(default)]
+    pub diagonals: DiagonalPattern,
+    /// Where the centre of the square goes in the horizontal plane.
+    pub centre: Centre,
+    pub height: Height,
+    /// Particle P whose trajectory Figs. 5.4 and 5.9 plot, as (row, column) of the grid; row runs along
+    /// material y, column along material x. The thesis does not say which it was; the scenes use a
+    /// corner, which exists in every mesh.
+    pub tracked_vertex: (usize, usize),
+}
+
+/// Where the cloth's centre starts, seen from above.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Centre {
+    /// Over the highest point of the objects (for the Bunny, the tip of an ear), so the middle particle
+    /// touches first, within milliseconds, as the thesis's frame counts imply (spec §7.5).
+    OverHighestPoint,
+    /// At this (x, y), m.
+    At(DVec2),
+}
+
+/// How high the cloth starts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Height {
+    /// `clearance_m` above the highest point of every bounded object (the spec's default, 1 mm: the
+    /// frame counts put the first contact within about 6 ms of the start, §7.5).
+    AboveObjects { clearance_m: f64 },
+    /// At this height, m.
+    At { z_m: f64 },
+}
+
+/// One static object.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    pub name: String,
+    /// μ of the object; a contact uses the mean of the cloth's and the object's (Eq. 4.17).
+    pub friction: f64,
+    pub shape: ShapeDesc,
+}
+
+/// The axis a mesh file treats as up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum UpAxis {
+    X,
+    Y,
+    Z,
+}
+
+/// The geometry of a static object.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum ShapeDesc {
+    /// A closed triangle mesh from an OBJ file (path relative to the scene file). It is rotated so that
+    /// `up` becomes +z, scaled so that its longest horizontal extent is `length_m`, and moved so that the
+    /// centre of the bottom of its bounding box sits at `base_centre_m`.
+    Mesh {
+        file: String,
+        up: UpAxis,
+        length_m: f64,
+        base_centre_m: DVec3,
+    },
+    Sphere {
+        centre_m: DVec3,
+        radius_m: f64,
+    },
+    /// A closed cylinder with a vertical axis (a round table top), from its bottom disc's centre.
+    Cylinder {
+        base_centre_m: DVec3,
+        radius_m: f64,
+        height_m: f64,
+    },
+    /// Everything below the plane through `point_m` with outward `normal` (a floor, an incline).
+    HalfSpace {
+        point_m: DVec3,
+        normal: DVec3,
+    },
+}
+
+/// How Δt is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum StepRule {
+    /// Δt = β·π·√(m_min / k^e_max) (Eq. 4.6), recomputed before every step, after `startup_dt_s` steps
+    /// until the first collision (A-10; Q-13: Test III does not say, and the scenes use it there too).
+    Provot { beta: f64, startup_dt_s: Option<f64> },
+    /// A constant step, s (not the thesis's; for comparisons).
+    Fixed { dt_s: f64 },
+}
+
+/// Force law of an edge spring (Eq. 4.8, A-12).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum SpringLaw {
+    /// No elastic force while |x_j − x_i| ≤ L⁰: the thesis's law. The default.
+    #[default]
+    TensionOnly,
+    /// The ordinary Hooke spring, pushing back when compressed too.
+    TwoSided,
+}
+
+/// When the spring damper of Eq. 4.9 acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum DamperLaw {
+    /// Always: Eq. 4.9 carries no condition. The default.
+    #[default]
+    Always,
+    /// Only while the spring is stretched, like its elastic force.
+    WithTension,
+}
+
+/// Which velocity the collision response of Eq. 4.16 starts from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ContactVelocity {
+    /// v^t, the velocity at the start of the step, as the text says. The default.
+    #[default]
+    StartOfStep,
+    /// The velocity RK4 computed at the end of the step.
+    EndOfStep,
+}
+
+/// What a hit does to a particle that is already moving away from the surface (spec §5.5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum SeparatingContact {
+    /// Keep its velocity (Eqs. 4.16–4.17 only when v·n̂ < 0); the position is still reset by Eq. 4.18.
+    /// The default.
+    #[default]
+    KeepVelocity,
+    /// Apply Eqs. 4.16–4.17 anyway, as printed.
+    Literal,
+}
+
+/// Every reconstruction switch, and anima's own switches.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default = "Options::thesis")]
+pub struct Options {
+    pub spring: SpringLaw,
+    pub damper: DamperLaw,
+    pub contact_velocity: ContactVelocity,
+    pub separating: SeparatingContact,
+    /// Cast the corrected path x^t → x̄ of a particle that was hit again, and answer a crossing the same
+    /// way (anima's addition, on by default). Eq. 4.18 restarts the particle from x^t with the new
+    /// velocity without testing that path, which on a concave surface (the Bunny's creases, where it
+    /// meets the floor) can carry it through a neighbouring face. Off gives the thesis's rule as printed.
+    pub recheck_corrected_path: bool,
+    /// Skip the exact path test of a particle whose path cannot reach any object (its length is below
+    /// a lower bound on its distance from every surface). Changes no result; off only to check that.
+    pub cull_collision_tests: bool,
+}
+
+impl Options {
+    /// The spec's defaults.
+    pub const fn thesis() -> Self {
+        Self {
+            spring: SpringLaw::TensionOnly,
+            damper: DamperLaw::Always,
+            contact_velocity: ContactVelocity::StartOfStep,
+            separating: SeparatingContact::KeepVelocity,
+            recheck_corrected_path: true,
+            cull_collision_tests: true,
+        }
+    }
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self::thesis()
+    }
+}

@@ -1,0 +1,390 @@
+//! [`Stepper`]: one integrator with the scratch buffers it needs.
+
+#![allow(
+    clippy::needless_range_loop,
+    reason = "the loops walk several per-coordinate arrays in step; the index form mirrors the formulas"
+)]
+
+use crate::implicit::ImplicitWorkspace;
+use crate::{Coord, Integrator, OdeSystem};
+
+/// Positions and velocities of a second-order system.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State<C> {
+    pub x: Vec<C>,
+    pub v: Vec<C>,
+}
+
+impl<C: Coord> State<C> {
+    pub fn new(x: Vec<C>, v: Vec<C>) -> Self {
+        assert_eq!(x.len(), v.len(), "as many velocities as positions");
+        Self { x, v }
+    }
+
+    /// `n` coordinates, all zero.
+    pub fn zeros(n: usize) -> Self {
+        Self { x: vec![C::default(); n], v: vec![C::default(); n] }
+    }
+
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Index of the first coordinate whose position or velocity is not finite.
+    pub fn first_non_finite(&self) -> Option<usize> {
+        self.x.iter().zip(&self.v).position(|(x, v)| !(x.is_finite() && v.is_finite()))
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepStats {
+    /// Acceleration (or force-and-Jacobian) evaluations.
+    pub evaluations: usize,
+    /// Estimated local error of the step, in position units (max norm over coordinates of the position
+    /// error and h × the velocity error), for the adaptive methods.
+    pub error: Option<f64>,
+    /// Conjugate-gradient iterations of an implicit step.
+    pub solver_iterations: usize,
+}
+
+/// Why a step could not be taken.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OdeError {
+    #[error("{0} needs the system's Jacobians, and this system gives none")]
+    NoJacobians(Integrator),
+    #[error(
+        "the linear solve of an implicit step did not converge ({iterations} iterations, residual {residual:e})"
+    )]
+    SolverDidNotConverge { iterations: usize, residual: f64 },
+}
+
+/// Butcher tableau of an explicit Runge–Kutta method; `e` holds b − b̂ for an embedded error estimate.
+struct Tableau {
+    c: &'static [f64],
+    a: &'static [&'static [f64]],
+    b: &'static [f64],
+    e: Option<&'static [f64]>,
+}
+
+const MIDPOINT: Tableau = Tableau { c: &[0.0, 0.5], a: &[&[], &[0.5]], b: &[0.0, 1.0], e: None };
+
+/// Dormand & Prince (1980), the RK5(4)7M pair.
+const DOPRI5: Tableau = Tableau {
+    c: &[0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0],
+    a: &[
+        &[],
+        &[1.0 / 5.0],
+        &[3.0 / 40.0, 9.0 / 40.0],
+        &[44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0],
+        &[19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0],
+        &[9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0],
+        &[35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+    ],
+    b: &[35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0],
+    e: Some(&[
+        71.0 / 57600.0,
+        0.0,
+        -71.0 / 16695.0,
+        71.0 / 1920.0,
+        -17253.0 / 339200.0,
+        22.0 / 525.0,
+        -1.0 / 40.0,
+    ]),
+};
+
+/// History of a multistep method: f = (v, a) at the last four steps, newest first.
+#[derive(Debug, Clone)]
+struct History<C> {
+    v: [Vec<C>; 4],
+    a: [Vec<C>; 4],
+    len: usize,
+    h: f64,
+}
+
+/// An integrator with the scratch buffers it needs, owned by the caller so that the step loop never
+/// allocates.
+#[derive(Debug, Clone)]
+pub struct Stepper<C: Coord> {
+    integrator: Integrator,
+    n: usize,
+    a: Vec<C>,
+    xs: Vec<C>,
+    vs: Vec<C>,
+    dx: Vec<C>,
+    dv: Vec<C>,
+    /// Stage slopes of the tableau methods: kx = stage velocity, kv = stage acceleration.
+    kx: Vec<Vec<C>>,
+    kv: Vec<Vec<C>>,
+    history: Option<History<C>>,
+    implicit: Option<ImplicitWorkspace<C>>,
+}
+
+impl<C: Coord> Stepper<C> {
+    pub fn new(integrator: Integrator, n_coords: usize) -> Self {
+        let n = n_coords;
+        let zeros = || vec![C::default(); n];
+        let stages = match integrator {
+            Integrator::Midpoint => 2,
+            Integrator::DormandPrince => 7,
+            _ => 0,
+        };
+        let rk4_buffers = matches!(
+            integrator,
+            Integrator::Rk4 | Integrator::AdamsBashforth4 | Integrator::AdamsBashforthMoulton4
+        );
+        let buf = |on: bool| if on { zeros() } else { Vec::new() };
+        Self {
+            integrator,
+            n,
+            a: zeros(),
+            xs: buf(rk4_buffers || stages > 0 || integrator == Integrator::AdaptiveEuler),
+            vs: buf(rk4_buffers || stages > 0 || integrator == Integrator::AdaptiveEuler),
+            dx: buf(rk4_buffers),
+            dv: buf(rk4_buffers),
+            kx: (0..stages).map(|_| zeros()).collect(),
+            kv: (0..stages).map(|_| zeros()).collect(),
+            history: integrator.is_multistep().then(|| History {
+                v: std::array::from_fn(|_| zeros()),
+                a: std::array::from_fn(|_| zeros()),
+                len: 0,
+                h: 0.0,
+            }),
+            implicit: (integrator == Integrator::ImplicitEuler).then(|| ImplicitWorkspace::new(n)),
+        }
+    }
+
+    pub fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+
+    pub(crate) fn set_solver(&mut self, solver: crate::LinearSolver) {
+        if let Some(ws) = &mut self.implicit {
+            ws.solver = solver;
+        }
+    }
+
+    /// Forgets the history of a multistep method, so that the next steps start it again with RK4. Call
+    /// after anything changed the state outside the integrator (a collision response, a constraint).
+    pub fn reset_history(&mut self) {
+        if let Some(h) = &mut self.history {
+            h.len = 0;
+        }
+    }
+
+    /// One step of size `h` from `now` (at time `t`) into `next`.
+    pub fn step<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) -> Result<StepStats, OdeError> {
+        let n = self.n;
+        assert!(
+            sys.n_coords() == n && now.len() == n && next.len() == n,
+            "the stepper, the system and both states must have the same size"
+        );
+        let (x, v) = (&now.x[..], &now.v[..]);
+        Ok(match self.integrator {
+            Integrator::ForwardEuler => {
+                sys.acceleration(t, x, v, &mut self.a);
+                for i in 0..n {
+                    next.x[i] = x[i] + v[i] * h;
+                    next.v[i] = v[i] + self.a[i] * h;
+                }
+                StepStats { evaluations: 1, ..Default::default() }
+            }
+            Integrator::SymplecticEuler => {
+                sys.acceleration(t, x, v, &mut self.a);
+                for i in 0..n {
+                    let vi = v[i] + self.a[i] * h;
+                    next.v[i] = vi;
+                    next.x[i] = x[i] + vi * h;
+                }
+                StepStats { evaluations: 1, ..Default::default() }
+            }
+            Integrator::Rk4 => {
+                sys.acceleration(t, x, v, &mut self.a);
+                self.rk4_from_a(sys, t, h, now, next);
+                StepStats { evaluations: 4, ..Default::default() }
+            }
+            Integrator::Midpoint => self.tableau(sys, t, h, now, next, &MIDPOINT),
+            Integrator::DormandPrince => self.tableau(sys, t, h, now, next, &DOPRI5),
+            Integrator::AdamsBashforth4 | Integrator::AdamsBashforthMoulton4 => {
+                self.multistep(sys, t, h, now, next)
+            }
+            Integrator::AdaptiveEuler => self.adaptive_euler(sys, t, h, now, next),
+            Integrator::ImplicitEuler => {
+                let ws = self.implicit.as_mut().expect("allocated for implicit Euler");
+                let lin = sys.linearized().ok_or(OdeError::NoJacobians(Integrator::ImplicitEuler))?;
+                ws.step(lin, t, h, now, next)?
+            }
+        })
+    }
+
+    /// Classical RK4 given a = a(t, x, v) already in `self.a`. Increments are accumulated in (dx, dv) with
+    /// weights 1, 2, 2, 1 and applied once at the end.
+    fn rk4_from_a<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) {
+        let (x, v, n) = (&now.x[..], &now.v[..], self.n);
+        let half = 0.5 * h;
+        for i in 0..n {
+            self.dx[i] = v[i];
+            self.dv[i] = self.a[i];
+            self.xs[i] = x[i] + v[i] * half;
+            self.vs[i] = v[i] + self.a[i] * half;
+        }
+        // Stages 2 and 3 at the midpoint; stage 3's slope then carries the state a full step.
+        for step_to in [half, h] {
+            sys.acceleration(t + half, &self.xs, &self.vs, &mut self.a);
+            for i in 0..n {
+                let (kx, kv) = (self.vs[i], self.a[i]);
+                self.dx[i] += kx * 2.0;
+                self.dv[i] += kv * 2.0;
+                self.xs[i] = x[i] + kx * step_to;
+                self.vs[i] = v[i] + kv * step_to;
+            }
+        }
+        sys.acceleration(t + h, &self.xs, &self.vs, &mut self.a);
+        let w = h / 6.0;
+        for i in 0..n {
+            next.x[i] = x[i] + (self.dx[i] + self.vs[i]) * w;
+            next.v[i] = v[i] + (self.dv[i] + self.a[i]) * w;
+        }
+    }
+
+    /// Any explicit Runge–Kutta method given by its tableau, with the embedded error estimate if it has one.
+    fn tableau<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+        tab: &Tableau,
+    ) -> StepStats {
+        let (x, v, n) = (&now.x[..], &now.v[..], self.n);
+        for (s, row) in tab.a.iter().enumerate() {
+            for i in 0..n {
+                let (mut xs, mut vs) = (x[i], v[i]);
+                for (j, &aij) in row.iter().enumerate() {
+                    if aij != 0.0 {
+                        xs += self.kx[j][i] * (h * aij);
+                        vs += self.kv[j][i] * (h * aij);
+                    }
+                }
+                self.xs[i] = xs;
+                self.vs[i] = vs;
+            }
+            sys.acceleration(t + tab.c[s] * h, &self.xs, &self.vs, &mut self.kv[s]);
+            self.kx[s].copy_from_slice(&self.vs);
+        }
+        let mut error = 0.0f64;
+        for i in 0..n {
+            let (mut xn, mut vn) = (x[i], v[i]);
+            for (j, &bj) in tab.b.iter().enumerate() {
+                if bj != 0.0 {
+                    xn += self.kx[j][i] * (h * bj);
+                    vn += self.kv[j][i] * (h * bj);
+                }
+            }
+            next.x[i] = xn;
+            next.v[i] = vn;
+            if let Some(e) = tab.e {
+                let (mut ex, mut ev) = (C::default(), C::default());
+                for (j, &ej) in e.iter().enumerate() {
+                    if ej != 0.0 {
+                        ex += self.kx[j][i] * (h * ej);
+                        ev += self.kv[j][i] * (h * ej);
+                    }
+                }
+                error = error.max(ex.max_abs()).max(h * ev.max_abs());
+            }
+        }
+        StepStats { evaluations: tab.c.len(), error: tab.e.map(|_| error), solver_iterations: 0 }
+    }
+
+    /// Adams–Bashforth 4, or the PECE Adams–Bashforth–Moulton 4 pair; RK4 while the history fills.
+    fn multistep<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) -> StepStats {
+        let (x, v, n) = (&now.x[..], &now.v[..], self.n);
+        let hist = self.history.as_mut().expect("allocated for multistep methods");
+        if hist.len > 0 && hist.h != h {
+            hist.len = 0;
+        }
+        hist.h = h;
+        // Shift the history and put f_n = (v_n, a_n) in front.
+        hist.v.rotate_right(1);
+        hist.a.rotate_right(1);
+        hist.v[0].copy_from_slice(v);
+        sys.acceleration(t, x, v, &mut hist.a[0]);
+        hist.len = (hist.len + 1).min(4);
+        if hist.len < 4 {
+            self.a.copy_from_slice(&self.history.as_ref().expect("present").a[0]);
+            self.rk4_from_a(sys, t, h, now, next);
+            return StepStats { evaluations: 4, ..Default::default() };
+        }
+        let w = h / 24.0;
+        let (hv, ha) = (&hist.v, &hist.a);
+        for i in 0..n {
+            next.x[i] = x[i] + (hv[0][i] * 55.0 - hv[1][i] * 59.0 + hv[2][i] * 37.0 - hv[3][i] * 9.0) * w;
+            next.v[i] = v[i] + (ha[0][i] * 55.0 - ha[1][i] * 59.0 + ha[2][i] * 37.0 - ha[3][i] * 9.0) * w;
+        }
+        if self.integrator == Integrator::AdamsBashforth4 {
+            return StepStats { evaluations: 1, ..Default::default() };
+        }
+        // Evaluate at the prediction, then correct with Adams–Moulton.
+        sys.acceleration(t + h, &next.x, &next.v, &mut self.a);
+        let hist = self.history.as_ref().expect("present");
+        let (hv, ha) = (&hist.v, &hist.a);
+        for i in 0..n {
+            let vp = next.v[i];
+            next.x[i] = x[i] + (vp * 9.0 + hv[0][i] * 19.0 - hv[1][i] * 5.0 + hv[2][i]) * w;
+            next.v[i] = v[i] + (self.a[i] * 9.0 + ha[0][i] * 19.0 - ha[1][i] * 5.0 + ha[2][i]) * w;
+        }
+        StepStats { evaluations: 2, ..Default::default() }
+    }
+
+    /// Forward Euler plus the thesis's error estimate h²/2·|f′| (Nedel 1993 §4.2.1), with f′ taken from
+    /// the difference of f over the step: for the position rows f′ = a, for the velocity rows
+    /// f′ ≈ (a(t + h) − a(t))/h. The error is reported in position units (velocity rows × h).
+    fn adaptive_euler<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) -> StepStats {
+        let (x, v, n) = (&now.x[..], &now.v[..], self.n);
+        sys.acceleration(t, x, v, &mut self.a);
+        for i in 0..n {
+            next.x[i] = x[i] + v[i] * h;
+            next.v[i] = v[i] + self.a[i] * h;
+        }
+        sys.acceleration(t + h, &next.x, &next.v, &mut self.vs);
+        let mut fprime = 0.0f64;
+        for i in 0..n {
+            fprime = fprime.max(self.a[i].max_abs()).max((self.vs[i] - self.a[i]).max_abs());
+        }
+        StepStats { evaluations: 2, error: Some(0.5 * h * h * fprime), solver_iterations: 0 }
+    }
+}

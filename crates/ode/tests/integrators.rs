@@ -1,0 +1,187 @@
+//! Convergence orders, energy behaviour, stability intervals and step control of every integrator, on
+//! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t).
+
+use anima_ode::stability::stability_limit;
+use anima_ode::{Integrator, OdeSystem, State, StepControl, Stepper, integrate};
+
+struct Spring;
+
+impl OdeSystem for Spring {
+    type Coord = f64;
+    fn n_coords(&self) -> usize {
+        1
+    }
+    fn acceleration(&mut self, _t: f64, x: &[f64], _v: &[f64], a: &mut [f64]) {
+        a[0] = -(x[0] - 2.0);
+    }
+}
+
+/// Error of the state (x, v) at t_end for constant step h, against x = 2 + 2 cos t, v = −2 sin t.
+fn error(integrator: Integrator, h: f64, t_end: f64) -> f64 {
+    let mut st = Stepper::new(integrator, 1);
+    let mut now = State::new(vec![4.0], vec![0.0]);
+    let mut scratch = State::zeros(1);
+    integrate(
+        &mut Spring,
+        &mut st,
+        StepControl::Constant { dt: h },
+        0.0,
+        t_end,
+        &mut now,
+        &mut scratch,
+        |_, _| {},
+    )
+    .unwrap();
+    (now.x[0] - (2.0 + 2.0 * t_end.cos())).hypot(now.v[0] + 2.0 * t_end.sin())
+}
+
+/// Observed orders from three step sizes h, h/2, h/4.
+fn observed_orders(integrator: Integrator, h: f64) -> [f64; 2] {
+    let e = [error(integrator, h, 2.0), error(integrator, h / 2.0, 2.0), error(integrator, h / 4.0, 2.0)];
+    [(e[0] / e[1]).log2(), (e[1] / e[2]).log2()]
+}
+
+#[test]
+fn convergence_orders_from_three_step_sizes() {
+    for (integrator, h, order) in [
+        (Integrator::ForwardEuler, 0.01, 1.0),
+        (Integrator::SymplecticEuler, 0.01, 1.0),
+        (Integrator::Midpoint, 0.01, 2.0),
+        (Integrator::Rk4, 0.05, 4.0),
+        (Integrator::AdamsBashforth4, 0.02, 4.0),
+        (Integrator::AdamsBashforthMoulton4, 0.02, 4.0),
+        (Integrator::DormandPrince, 0.1, 5.0),
+    ] {
+        let observed = observed_orders(integrator, h);
+        for p in observed {
+            assert!((p - order).abs() <= 0.2, "{integrator}: observed orders {observed:?}, expected {order}");
+        }
+    }
+}
+
+/// Energy of the unit-stiffness, unit-mass spring about its rest length.
+fn energy(s: &State<f64>) -> f64 {
+    0.5 * s.v[0] * s.v[0] + 0.5 * (s.x[0] - 2.0) * (s.x[0] - 2.0)
+}
+
+#[test]
+fn symplectic_euler_keeps_energy_bounded_and_forward_euler_does_not() {
+    let run = |integrator| {
+        let mut st = Stepper::new(integrator, 1);
+        let mut now = State::new(vec![4.0], vec![0.0]);
+        let mut scratch = State::zeros(1);
+        let mut worst = 0.0f64;
+        integrate(
+            &mut Spring,
+            &mut st,
+            StepControl::Constant { dt: 0.05 },
+            0.0,
+            5000.0,
+            &mut now,
+            &mut scratch,
+            |_, s| worst = worst.max((energy(s) - 2.0).abs() / 2.0),
+        )
+        .unwrap();
+        (worst, energy(&now))
+    };
+    let (drift, _) = run(Integrator::SymplecticEuler);
+    assert!(drift < 0.03, "symplectic Euler energy drifted by {drift} over 1e5 steps");
+    let (_, last) = run(Integrator::ForwardEuler);
+    assert!(last > 2.0 * 1e10, "forward Euler must gain energy: {last}");
+}
+
+#[test]
+fn measured_stability_intervals_on_the_imaginary_axis() {
+    // Known values: symplectic Euler 2, RK4 2√2; forward Euler and midpoint grow at every step.
+    assert!((stability_limit(Integrator::SymplecticEuler) - 2.0).abs() < 2e-3);
+    assert!((stability_limit(Integrator::Rk4) - 8f64.sqrt()).abs() < 2e-3);
+    assert_eq!(stability_limit(Integrator::ForwardEuler), 0.0);
+    assert_eq!(stability_limit(Integrator::AdaptiveEuler), 0.0);
+    // Midpoint grows by y⁴/8 per step: 10⁻⁶ per radian is reached at y = 0.02.
+    let midpoint = stability_limit(Integrator::Midpoint);
+    assert!((0.015..0.025).contains(&midpoint), "midpoint {midpoint}");
+    // AB4's interval ends at 0.43; Dormand–Prince's just below 1.
+    assert!((stability_limit(Integrator::AdamsBashforth4) - 0.43).abs() < 0.01);
+    let dopri = stability_limit(Integrator::DormandPrince);
+    assert!((0.9..1.0).contains(&dopri), "dopri5 {dopri}");
+    let abm4 = stability_limit(Integrator::AdamsBashforthMoulton4);
+    assert!(abm4 > 0.0 && abm4 < 0.43, "ABM4 PECE grows slowly on the imaginary axis: {abm4}");
+}
+
+#[test]
+fn embedded_control_meets_its_tolerance_with_fewer_steps_when_looser() {
+    let run = |tol: f64| {
+        let mut st = Stepper::new(Integrator::DormandPrince, 1);
+        let mut now = State::new(vec![4.0], vec![0.0]);
+        let mut scratch = State::zeros(1);
+        let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-6, dt_max: 1.0 };
+        let stats =
+            integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap();
+        ((now.x[0] - (2.0 + 2.0 * 10f64.cos())).abs(), stats)
+    };
+    let (e_tight, s_tight) = run(1e-10);
+    let (e_loose, s_loose) = run(1e-5);
+    assert!(e_tight < 1e-7, "global error {e_tight} at tolerance 1e-10");
+    assert!(e_loose < 1e-2 && e_loose > e_tight, "global error {e_loose} at tolerance 1e-5");
+    assert!(s_loose.steps < s_tight.steps, "{} vs {} steps", s_loose.steps, s_tight.steps);
+}
+
+#[test]
+fn thesis_adaptive_euler_takes_smaller_steps_for_a_tighter_error() {
+    let run = |tol: f64| {
+        let mut st = Stepper::new(Integrator::AdaptiveEuler, 1);
+        let mut now = State::new(vec![4.0], vec![0.0]);
+        let mut scratch = State::zeros(1);
+        let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-7, dt_max: 1.0 };
+        let stats =
+            integrate(&mut Spring, &mut st, control, 0.0, 2.0, &mut now, &mut scratch, |_, _| {}).unwrap();
+        ((now.x[0] - (2.0 + 2.0 * 2f64.cos())).abs(), stats)
+    };
+    let (e1, s1) = run(1e-4);
+    let (e2, s2) = run(1e-6);
+    // h ∝ √tol, so 100× tighter means about 10× the steps and 10× less error (first order).
+    let ratio = s2.steps as f64 / s1.steps as f64;
+    assert!((7.0..14.0).contains(&ratio), "steps {} → {}", s1.steps, s2.steps);
+    assert!(e2 < e1 / 5.0, "error {e1} → {e2}");
+}
+
+#[test]
+fn non_finite_state_is_reported_with_its_step() {
+    struct Blowup;
+    impl OdeSystem for Blowup {
+        type Coord = f64;
+        fn n_coords(&self) -> usize {
+            2
+        }
+        fn acceleration(&mut self, t: f64, _x: &[f64], _v: &[f64], a: &mut [f64]) {
+            a[0] = 0.0;
+            a[1] = if t >= 0.5 { f64::INFINITY } else { 1.0 };
+        }
+    }
+    let mut st = Stepper::new(Integrator::ForwardEuler, 2);
+    let mut now = State::zeros(2);
+    let mut scratch = State::zeros(2);
+    let err = integrate(
+        &mut Blowup,
+        &mut st,
+        StepControl::Constant { dt: 0.1 },
+        0.0,
+        1.0,
+        &mut now,
+        &mut scratch,
+        |_, _| {},
+    )
+    .unwrap_err();
+    assert_eq!(
+        err,
+        anima_ode::IntegrationError::NonFinite { step: 6, time: 0.6000000000000001, coordinate: 1 }
+    );
+}
+
+#[test]
+fn implicit_euler_refuses_a_system_without_jacobians() {
+    let mut st = Stepper::new(Integrator::ImplicitEuler, 1);
+    let now = State::new(vec![4.0], vec![0.0]);
+    let mut next = State::zeros(1);
+    assert!(st.step(&mut Spring, 0.0, 0.1, &now, &mut next).is_err());
+}
