@@ -86,6 +86,7 @@ fn run_writes_frames_pictures_and_summary() {
         frame0: true,
         pictures: true,
         progress: false,
+        warn_stability: false,
     };
     let outcome = run(&loaded, &opts, |_, _| {}).unwrap();
     let s = &outcome.summary;

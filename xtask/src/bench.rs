@@ -21,6 +21,8 @@ struct Point {
     knob: f64,
     seconds: f64,
     error: f64,
+    /// Distance of the final centre of mass from the reference value of `benchmarks.md`, m.
+    com_error: f64,
 }
 
 /// One integrator on one scene.
@@ -29,6 +31,8 @@ struct Curve {
     integrator: Integrator,
     points: Vec<Point>,
     largest_stable: Option<f64>,
+    /// The run at the largest stable step.
+    at_largest: Option<Point>,
 }
 
 fn cache_dir() -> PathBuf {
@@ -43,6 +47,8 @@ struct SheetScene {
     title: String,
     spec: SheetSpec,
     duration: f64,
+    /// The centre of mass at the end given by `benchmarks.md`, where it gives one.
+    com_reference: Option<DVec3>,
 }
 
 /// Runs a sheet; returns final positions and wall time, or None if it went non-finite or wild.
@@ -110,6 +116,12 @@ fn reference(scene: &SheetScene) -> Result<Vec<DVec3>> {
     Ok(x)
 }
 
+fn measure(scene: &SheetScene, knob: f64, seconds: f64, x: &[DVec3], reference: &[DVec3]) -> Point {
+    let com = scene.spec.build().centre_of_mass(x);
+    let com_error = scene.com_reference.map_or(f64::NAN, |r| com.distance(r));
+    Point { knob, seconds, error: rms(x, reference), com_error }
+}
+
 fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
     (a.iter().zip(b).map(|(p, q)| p.distance_squared(*q)).sum::<f64>() / a.len() as f64).sqrt()
 }
@@ -164,12 +176,16 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
                 continue;
             }
             if let Some((x, seconds)) = run_sheet(scene, integrator, control) {
-                points.push(Point { knob, seconds, error: rms(&x, &reference) });
+                points.push(measure(scene, knob, seconds, &x, &reference));
             }
         }
         let largest_stable = (!integrator.is_adaptive() && integrator != Integrator::ImplicitEuler && !quick)
             .then(|| largest_stable_step(scene, integrator));
-        curves.push(Curve { integrator, points, largest_stable });
+        let at_largest = largest_stable.and_then(|dt| {
+            run_sheet(scene, integrator, StepControl::Constant { dt })
+                .map(|(x, secs)| measure(scene, dt, secs, &x, &reference))
+        });
+        curves.push(Curve { integrator, points, largest_stable, at_largest });
     }
     Ok((curves, reference))
 }
@@ -239,10 +255,15 @@ fn mass_spring_curves() -> Vec<Curve> {
                         reps += 1;
                     }
                     let seconds = start.elapsed().as_secs_f64() / reps as f64;
-                    (error.is_finite() && error < 10.0).then_some(Point { knob, seconds, error })
+                    (error.is_finite() && error < 10.0).then_some(Point {
+                        knob,
+                        seconds,
+                        error,
+                        com_error: f64::NAN,
+                    })
                 })
                 .collect();
-            Curve { integrator, points, largest_stable: Some(stability_limit(integrator)) }
+            Curve { integrator, points, largest_stable: Some(stability_limit(integrator)), at_largest: None }
         })
         .collect()
 }
@@ -345,20 +366,24 @@ pub fn run(quick: bool) -> Result<()> {
             title: "(b) standard sheet, N = 32".into(),
             spec: SheetSpec::standard(32),
             duration: 1.0,
+            com_reference: Some(DVec3::new(0.4999997, -0.4792614, 1.4655051)),
         },
         SheetScene {
             name: "standard-64",
             title: "(b) standard sheet, N = 64".into(),
             spec: SheetSpec::standard(64),
             duration: 1.0,
+            com_reference: Some(DVec3::new(0.5000605, -0.4684101, 1.4631486)),
         },
         SheetScene {
             name: "oliveira-64",
             title: "(c) Oliveira's cloth (E = 10⁷ N/m²), N = 64".into(),
             spec: SheetSpec::oliveira_cloth(64),
             duration: 1.0,
+            com_reference: None,
         },
     ];
+    let mut peers = String::new();
     for scene in &scenes {
         let (curves, _) = sheet_curves(scene, quick)?;
         let png = format!("bench-{}.png", scene.name);
@@ -381,7 +406,11 @@ pub fn run(quick: bool) -> Result<()> {
             " s",
         );
         let _ = writeln!(doc, "![{}](figures/{png})\n", scene.name);
+        if scene.com_reference.is_some() {
+            peers.push_str(&peer_table(scene, &curves));
+        }
     }
+    doc.push_str(&peers_section(&peers));
 
     // Stability map.
     eprintln!("xtask: stability map …");
@@ -391,6 +420,82 @@ pub fn run(quick: bool) -> Result<()> {
     anima::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
     eprintln!("xtask: wrote {}", path.display());
     Ok(())
+}
+
+/// The peers' numbers from `benchmarks.md` (wall time for 1 s; N = 32, N = 64), measured there on this
+/// machine class.
+const PEERS: [(&str, &str, &str, &str); 7] = [
+    ("NVIDIA Warp, CPU, f32, symplectic Euler", "0.34 s", "4.29 s", "1.0–1.3 mm"),
+    ("Newton (on Warp), semi-implicit", "0.42 s", "5.39 s", "0.8–0.9 mm"),
+    ("Taichi, CPU, 2 threads", "2.31 s", "7.45 s", "1.0–1.1 mm"),
+    ("MuJoCo 4.0 flex (membrane FEM), Euler", "5.88 s", "49.3 s", "4.4–4.8 mm"),
+    ("PyBullet deformable", "16.8 s", "242 s", "8.6–19 mm"),
+    ("Newton VBD (implicit), largest stable step", "2.18 s at 4e-3", "17.6 s at 2e-3", "118–125 mm"),
+    ("MuJoCo flex, implicit (`discrete`), 1/60 s", "0.63 s", "9.0 s", "339–346 mm"),
+];
+
+/// Fastest peer time for N = 32 and N = 64, s (Warp).
+const FASTEST_PEER: [f64; 2] = [0.34, 4.29];
+
+fn peer_table(scene: &SheetScene, curves: &[Curve]) -> String {
+    let n = scene.spec.n;
+    let (common, fastest) = if n <= 32 { (2e-4, FASTEST_PEER[0]) } else { (1e-4, FASTEST_PEER[1]) };
+    let mut out = format!(
+        "### N = {n}: anima at the common step ({common:.0e} s) and at each method's largest stable step\n\n\
+         | integrator | step (s) | wall time | × fastest peer (Warp {fastest} s) | centre-of-mass error | RMS error |\n|---|---|---|---|---|---|\n"
+    );
+    for c in curves {
+        let mut rows: Vec<(&str, Point)> = Vec::new();
+        if let Some(p) = c.points.iter().find(|p| (p.knob - common).abs() < 1e-12) {
+            rows.push(("common", *p));
+        }
+        if let Some(p) = c.at_largest {
+            rows.push(("largest stable", p));
+        }
+        if c.integrator == Integrator::ImplicitEuler {
+            for p in c.points.iter().filter(|p| p.knob > 1e-3) {
+                rows.push(("large", *p));
+            }
+        }
+        if c.integrator.is_adaptive() {
+            if let Some(p) = c.points.iter().min_by(|a, b| a.seconds.total_cmp(&b.seconds)) {
+                rows.push(("tolerance", *p));
+            }
+        }
+        for (what, p) in rows {
+            let _ = writeln!(
+                out,
+                "| {} | {:.2e} ({what}) | {:.3} s | {:.2}× faster | {:.2} mm | {:.2} mm |",
+                c.integrator,
+                p.knob,
+                p.seconds,
+                fastest / p.seconds,
+                p.com_error * 1e3,
+                p.error * 1e3
+            );
+        }
+        if !c.points.iter().any(|p| (p.knob - common).abs() < 1e-12) && !c.integrator.is_adaptive() {
+            let _ = writeln!(out, "| {} | {common:.0e} (common) | unstable | — | — | — |", c.integrator);
+        }
+    }
+    out.push('\n');
+    out
+}
+
+fn peers_section(tables: &str) -> String {
+    let mut out = String::from(
+        "## The standard sheet beside other simulators\n\nThe peers' wall times for 1 simulated second, from \
+         `benchmarks.md` (same machine class, 2 cores):\n\n| system and method | N = 32 | N = 64 | centre-of-mass error |\n|---|---|---|---|\n",
+    );
+    for (name, a, b, e) in PEERS {
+        let _ = writeln!(out, "| {name} | {a} | {b} | {e} |");
+    }
+    out.push_str(
+        "\nanima's numbers below are single-threaded and f64; \"× fastest peer\" divides Warp's time by anima's. The \
+         centre-of-mass error is the distance from the reference centre of mass in `benchmarks.md`.\n\n",
+    );
+    out.push_str(tables);
+    out
 }
 
 /// Largest stable step against stiffness for each explicit method on a 16×16 undamped sheet, beside the
@@ -424,7 +529,8 @@ fn stability_map() -> Result<String> {
         let frozen = net.pinned().to_vec();
         let omega = max_frequency(&mut net, 0.0, &x, &vec![DVec3::ZERO; x.len()], &frozen, 200);
         let _ = write!(out, "| {k:.0e} | {omega:.0} |");
-        let scene = SheetScene { name: "map", title: String::new(), spec, duration: 0.5 };
+        let scene =
+            SheetScene { name: "map", title: String::new(), spec, duration: 0.5, com_reference: None };
         for (m, measured, bound) in &mut series {
             let limit = stability_limit(*m) / omega;
             let got = largest_stable_step(&scene, *m);

@@ -14,13 +14,6 @@ impl SpdSystem {
         Self { n, a: vec![0.0; n * n] }
     }
 
-    /// Zeroes the matrix and makes it `n` × `n`, reusing the storage (which must hold n²).
-    pub fn reset(&mut self, n: usize) {
-        assert!(n * n <= self.a.len(), "SpdSystem holds at most {} entries", self.a.len());
-        self.n = n;
-        self.a[..n * n].fill(0.0);
-    }
-
     pub fn clear(&mut self) {
         self.a.fill(0.0);
     }

@@ -75,8 +75,9 @@ pub enum BodyError {
     #[error("the {what} buffer was built for another model layout (expected {expected}, found {found})")]
     Layout { what: &'static str, expected: usize, found: usize },
     #[error(
-        "the simulation went non-finite at step {step} (t = {time} s), model `{model}`, body `{body}`; \
-         try a smaller step, more sub-steps or another PD mode"
+        "the simulation diverged at step {step} (t = {time} s), model `{model}`, body `{body}` \
+         (non-finite, faster than 1000 m/s or farther than 100 km); try a smaller step, more \
+         sub-steps or another PD mode"
     )]
     NonFinite { step: u64, time: f64, model: String, body: String },
 }

@@ -156,17 +156,7 @@ struct Tree {
     /// Needs the mass matrix this mode (stable PD, or a body-pair actuator in another mode).
     needs_mass: bool,
     actuators: Vec<usize>,
-    /// Stable PD: bodies of the tree touching the ground at the start of the step, the constraint
-    /// rows they give (x, y, θ of each), A⁻¹ J_cᵀ, and the Schur complement J_c A⁻¹ J_cᵀ.
-    grounded: Vec<usize>,
-    jc: Vec<f64>,
-    x: Vec<f64>,
-    schur: SpdSystem,
-    lambda: Vec<f64>,
 }
-
-/// At most this many bodies of one tree are held as contacts in the stable-PD prediction.
-const MAX_GROUNDED: usize = 4;
 
 /// Runtime data of one actuator.
 #[derive(Debug)]
@@ -244,6 +234,10 @@ impl std::fmt::Debug for World {
 }
 
 const GROUND_BIT: u32 = 1;
+/// A body this far from the origin (m), this fast (m/s) or spinning this fast (rad/s) has diverged.
+const DIVERGED_POSITION_M: f32 = 1.0e5;
+const DIVERGED_SPEED_M_S: f32 = 1.0e3;
+const DIVERGED_SPIN_RAD_S: f32 = 1.0e4;
 /// Index of the rotation about z in Rapier's 6-D joint layout.
 const ANG_Z: usize = 5;
 
@@ -428,11 +422,6 @@ impl World {
                 factored: false,
                 needs_mass: false,
                 actuators: Vec::new(),
-                grounded: Vec::with_capacity(MAX_GROUNDED),
-                jc: vec![0.0; 3 * MAX_GROUNDED * ndofs],
-                x: vec![0.0; 3 * MAX_GROUNDED * ndofs],
-                schur: SpdSystem::new(3 * MAX_GROUNDED),
-                lambda: vec![0.0; 3 * MAX_GROUNDED],
             });
         }
         // Dofs: a root's planar joint has x, y, θ (θ is its third dof); a hinge has one.
@@ -494,38 +483,25 @@ impl World {
             };
             let tree = &mut trees[rt.tree];
             tree.actuators.push(i);
-            if (mode == PdMode::StablePd && std::env::var("SPD_MATRIX").is_ok()) || rt.joint.is_none() {
+            if rt.joint.is_none() {
                 tree.needs_mass = true;
             }
             actuators.push(rt);
         }
 
-        // Per-mode joint set-up: the ODE-style brake is Rapier's dry joint friction on the dof; motors
-        // are force based.
+        // Per-mode joint set-up: the ODE-style brake is Rapier's dry joint friction on the dof (a
+        // zero-velocity constraint whose torque is capped, as ODE's motor with zero target speed);
+        // motors are force based (kp in N·m/rad, not normalised by mass).
         for (spec, rt) in skeleton.actuators().iter().zip(&actuators) {
             let Some((handle, dof)) = rt.joint else { continue };
             let (mb, link_id) = self.physics.multibody_joints.get_mut(handle).expect("joint exists");
             match mode {
-                PdMode::OdeBrake => {
-                    if let Ok(only) = std::env::var("BRAKE_ONLY")
-                        && only != spec.name
-                    {
-                        continue;
-                    }
-                    if std::env::var("FRICTION_BRAKE").is_ok() {
-                        mb.frictions_mut()[dof] = spec.brake_torque as f32;
-                    } else {
-                        let link = mb.link_mut(link_id).expect("link");
-                        link.joint.data.set_motor_model(rp::JointAxis::AngZ, rp::MotorModel::ForceBased);
-                        link.joint.data.set_motor_velocity(rp::JointAxis::AngZ, 0.0, 1.0e6);
-                        link.joint.data.set_motor_max_force(rp::JointAxis::AngZ, spec.brake_torque as f32);
-                    }
-                }
+                PdMode::OdeBrake => mb.frictions_mut()[dof] = spec.brake_torque as f32,
                 PdMode::ImplicitMotor => {
-                    let link = mb.link_mut(link_id).expect("link");
-                    link.joint.data.set_motor_model(rp::JointAxis::AngZ, rp::MotorModel::ForceBased);
-                    link.joint.data.set_motor(rp::JointAxis::AngZ, 0.0, 0.0, 0.0, 0.0);
-                    link.joint.data.set_motor_max_force(rp::JointAxis::AngZ, 0.0);
+                    let data = &mut mb.link_mut(link_id).expect("link").joint.data;
+                    data.set_motor_model(rp::JointAxis::AngZ, rp::MotorModel::ForceBased);
+                    data.set_motor(rp::JointAxis::AngZ, 0.0, 0.0, 0.0, 0.0);
+                    data.set_motor_max_force(rp::JointAxis::AngZ, 0.0);
                 }
                 PdMode::Explicit | PdMode::ImplicitSpring | PdMode::StablePd => {}
             }
@@ -733,7 +709,15 @@ impl World {
         for m in &self.models {
             for (b, &h) in m.handles.iter().enumerate() {
                 let rb = &self.physics.bodies[h];
-                let ok = rb.translation().is_finite() && rb.linvel().is_finite() && rb.angvel().is_finite();
+                // Beyond these the state is meaningless even if finite: an explicit PD far past its
+                // stability bound grows without limit.
+                let (x, v, w) = (rb.translation(), rb.linvel(), rb.angvel());
+                let ok = x.is_finite()
+                    && v.is_finite()
+                    && w.is_finite()
+                    && x.abs().max_element() < DIVERGED_POSITION_M
+                    && v.length() < DIVERGED_SPEED_M_S
+                    && w.length() < DIVERGED_SPIN_RAD_S;
                 if !ok || quarantined.contains(&h) {
                     return Err(BodyError::NonFinite {
                         step: self.steps,
@@ -748,13 +732,11 @@ impl World {
     }
 
     /// Reads the trees' coordinates, evaluates the actuators for one physics step of length `h` and
-    /// applies torques, motor targets, springs and external forces.
+    /// applies torques, joint springs, damping and external forces.
     fn actuate(&mut self, mi: usize, h: f64) {
-        let World { physics, models, settings, collider_owner, .. } = self;
+        let World { physics, models, settings, .. } = self;
         let m = &mut models[mi];
-        let sk = &m.skeleton;
-        let mode = sk.actuation().mode;
-        let sign = m.sign;
+        let mode = m.skeleton.actuation().mode;
 
         // Clear last step's forces; wake a sleeping model whose commands changed.
         let wake = settings.solver.sleeping && m.commands_changed;
@@ -768,209 +750,72 @@ impl World {
         }
         m.commands_changed = false;
 
-        // State: coordinates and velocities of every tree, then each actuator's angle and rate.
+        read_state(physics, m);
+        gather_signals(m);
+        // Mass matrices, for body-pair actuators only (their inertia), once per physics step.
         for tree in &mut m.trees {
-            let mb = physics.multibody_joints.get_multibody(tree.multibody).expect("multibody");
-            read_coordinates(mb, &mut tree.q, &mut tree.qd);
-        }
-        for (a, rt) in m.actuators.iter().enumerate() {
-            let t = &m.trees[rt.tree];
-            m.angle[a] = rt.selection.iter().map(|&(d, c)| c * t.q[d]).sum();
-            m.rate[a] = rt.selection.iter().map(|&(d, c)| c * t.qd[d]).sum();
+            if tree.needs_mass {
+                let mb = physics.multibody_joints.get_multibody(tree.multibody).expect("multibody");
+                assemble_mass_matrix(mb, &m.skeleton, &m.body_link, tree, settings.gravity);
+            }
         }
 
-        // Signals → per-actuator average (explicit modes) or mix (the others). Angles are handled
-        // counter-clockwise; `sign` converts the model's convention.
-        let explicit = matches!(mode, PdMode::Explicit | PdMode::OdeBrake);
+        let sign = m.sign;
         for a in 0..m.actuators.len() {
-            m.avg[a] = TorqueAverage::default();
-            m.mix[a] = TargetMix::default();
-        }
-        let body_angle = |tree: &Tree, dofs: &[usize]| dofs.iter().map(|&d| tree.q[d]).sum::<f64>();
-        for (a, spec) in sk.actuators().iter().enumerate() {
-            if let Some(fixed) = spec.fixed_target {
-                let target = sign * fixed;
-                if explicit {
-                    let kd = if mode == PdMode::OdeBrake { 0.0 } else { spec.kd };
-                    let t = signal_torque(
-                        Target::Angle(target),
-                        target,
-                        m.angle[a],
-                        m.rate[a],
-                        spec.kp,
-                        kd,
-                        spec.max_torque,
+            let spec = &m.skeleton.actuators()[a];
+            let rt = &m.actuators[a];
+            let (th, om, mix) = (m.angle[a], m.rate[a], m.mix[a]);
+            // Gains as the signals' weighted mix asks (W_angle/W of kp; kd while any signal asks).
+            let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
+            let tau = match (mode, rt.joint) {
+                (PdMode::Explicit, _) => m.avg[a].torque,
+                (PdMode::OdeBrake, Some(_)) => m.avg[a].torque,
+                (PdMode::OdeBrake, None) => {
+                    // No joint hosts a brake for a body pair: stop the relative rate with the pair's
+                    // effective inertia, within the brake torque (explicit emulation).
+                    let i_eff = effective_inertia(&mut m.trees[rt.tree], &rt.selection);
+                    m.avg[a].torque + (-i_eff * om / h).clamp(-spec.brake_torque, spec.brake_torque)
+                }
+                (PdMode::ImplicitSpring, Some((handle, dof))) => {
+                    let (mb, link_id) = physics.multibody_joints.get_mut(handle).expect("joint");
+                    mb.link_mut(link_id).expect("link").joint.set_spring(
+                        ANG_Z,
+                        kp as f32,
+                        mix.target() as f32,
                     );
-                    m.avg[a].add(t.unwrap_or(0.0), 1.0);
-                } else {
-                    m.mix[a] = TargetMix { weight: 1.0, angle_weight: 1.0, weighted_angle: target };
-                }
-            }
-        }
-        for s in m.commands.signals() {
-            let a = s.actuator;
-            let spec = &sk.actuators()[a];
-            if spec.fixed_target.is_some() {
-                continue;
-            }
-            let rt = &m.actuators[a];
-            let target = match (s.target, s.frame, rt.parent) {
-                (Target::Angle(t), TargetFrame::World, Some(p)) => {
-                    sign * t - body_angle(&m.trees[rt.tree], &m.body_angle_dofs[p])
-                }
-                (Target::Angle(t), _, _) => sign * t,
-                _ => 0.0,
-            };
-            if explicit {
-                let kd = if mode == PdMode::OdeBrake { 0.0 } else { spec.kd };
-                if let Some(t) =
-                    signal_torque(s.target, target, m.angle[a], m.rate[a], spec.kp, kd, spec.max_torque)
-                {
-                    m.avg[a].add(t, s.weight);
-                }
-            } else {
-                let mix = &mut m.mix[a];
-                match s.target {
-                    Target::Angle(_) => {
-                        mix.weight += s.weight;
-                        mix.angle_weight += s.weight;
-                        mix.weighted_angle += s.weight * target;
-                    }
-                    Target::DampingOnly => mix.weight += s.weight,
-                    Target::NoTorque => {}
-                }
-            }
-        }
-
-        // Mass matrices where this mode needs them.
-        let g = settings.gravity;
-        for tree in &mut m.trees {
-            if !tree.needs_mass || tree.actuators.is_empty() {
-                continue;
-            }
-            let mb = physics.multibody_joints.get_multibody(tree.multibody).expect("multibody");
-            assemble_mass_matrix(mb, sk, &m.body_link, tree, g);
-        }
-
-        // Torques per mode.
-        for a in 0..m.actuators.len() {
-            let spec = &sk.actuators()[a];
-            let rt = &m.actuators[a];
-            let (th, om) = (m.angle[a], m.rate[a]);
-            let mut tau = 0.0;
-            match mode {
-                PdMode::Explicit => tau = m.avg[a].torque,
-                PdMode::OdeBrake => {
-                    tau = m.avg[a].torque;
-                    if rt.joint.is_none() && std::env::var("NO_PAIR_BRAKE").is_err() {
-                        // No joint hosts a brake for a body pair: stop the relative rate with the
-                        // effective inertia, within the brake torque (explicit emulation).
-                        let i_eff = effective_inertia(&mut m.trees[rt.tree], &rt.selection);
-                        tau += (-i_eff * om / h).clamp(-spec.brake_torque, spec.brake_torque);
-                    }
-                }
-                PdMode::ImplicitMotor | PdMode::ImplicitSpring => {
-                    let mix = m.mix[a];
-                    let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
-                    match rt.joint {
-                        Some((handle, dof)) => {
-                            let (mb, link_id) = physics.multibody_joints.get_mut(handle).expect("joint");
-                            if mode == PdMode::ImplicitMotor {
-                                let data = &mut mb.link_mut(link_id).expect("link").joint.data;
-                                data.set_motor(
-                                    rp::JointAxis::AngZ,
-                                    mix.target() as f32,
-                                    0.0,
-                                    kp as f32,
-                                    kd as f32,
-                                );
-                                let cap = if mix.weight > 0.0 { spec.max_torque } else { 0.0 };
-                                data.set_motor_max_force(rp::JointAxis::AngZ, cap as f32);
-                            } else {
-                                mb.link_mut(link_id).expect("link").joint.set_spring(
-                                    ANG_Z,
-                                    kp as f32,
-                                    mix.target() as f32,
-                                );
-                                mb.damping_mut()[dof] = kd as f32;
-                            }
-                            // What the implicit PD applies, evaluated at the current state.
-                            tau =
-                                (kp * (mix.target() - th) - kd * om).clamp(-spec.max_torque, spec.max_torque);
-                            m.torque[a] = sign * tau;
-                            continue;
-                        }
-                        None => {
-                            // A body pair has no joint to host a motor: stable PD on its own
-                            // effective inertia, τ = (kp (θ̄ − θ − h θ̇) − kd θ̇) / (1 + h kd / I).
-                            let i_eff = effective_inertia(&mut m.trees[rt.tree], &rt.selection);
-                            tau = (kp * (mix.target() - th - h * om) - kd * om) / (1.0 + h * kd / i_eff);
-                            tau = tau.clamp(-spec.max_torque, spec.max_torque);
-                        }
-                    }
-                }
-                PdMode::StablePd => {
-                    let mix = m.mix[a];
-                    let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
-                    match rt.joint {
-                        Some((handle, dof)) if std::env::var("SPD_MATRIX").is_err() => {
-                            // Tan et al.'s τ = −kp (q + h q̇ − q̄) − kd (q̇ + h q̈): the proportional part
-                            // as a torque, the damping part as Rapier's implicit joint damping, so that
-                            // q̈ is Rapier's own articulated solve (gravity and Coriolis included).
-                            tau =
-                                (kp * (mix.target() - th - h * om)).clamp(-spec.max_torque, spec.max_torque);
-                            let (mb, _) = physics.multibody_joints.get_mut(handle).expect("joint");
-                            mb.damping_mut()[dof] = kd as f32;
-                        }
-                        Some(_) => {}
-                        None => {
-                            let i_eff = effective_inertia(&mut m.trees[rt.tree], &rt.selection);
-                            tau = (kp * (mix.target() - th - h * om) - kd * om) / (1.0 + h * kd / i_eff);
-                            tau = tau.clamp(-spec.max_torque, spec.max_torque);
-                        }
-                    }
-                }
-            }
-            m.torque[a] = sign * tau;
-        }
-        if mode == PdMode::StablePd && std::env::var("SPD_MATRIX").is_ok() {
-            for tree in &mut m.trees {
-                tree.grounded.clear();
-            }
-            for pair in physics.narrow_phase.contact_pairs() {
-                if !pair.has_any_active_contact() {
+                    mb.damping_mut()[dof] = kd as f32;
+                    // Not applied by us: what the implicit spring and damper exert at this state.
+                    m.torque[a] = sign * (kp * (mix.target() - th) - kd * om);
                     continue;
                 }
-                let owner = |c: rp::ColliderHandle| {
-                    collider_owner.get(c.into_raw_parts().0 as usize).copied().flatten()
-                };
-                let (o1, o2) = (owner(pair.collider1), owner(pair.collider2));
-                for (o, other) in [(o1, o2), (o2, o1)] {
-                    if let (Some((model, b)), None) = (o, other)
-                        && model == mi
-                    {
-                        let tree = &mut m.trees[m.body_tree[b]];
-                        if tree.grounded.len() < MAX_GROUNDED && !tree.grounded.contains(&b) {
-                            tree.grounded.push(b);
-                        }
-                    }
+                (PdMode::ImplicitMotor, Some((handle, _))) => {
+                    let (mb, link_id) = physics.multibody_joints.get_mut(handle).expect("joint");
+                    let data = &mut mb.link_mut(link_id).expect("link").joint.data;
+                    data.set_motor(rp::JointAxis::AngZ, mix.target() as f32, 0.0, kp as f32, kd as f32);
+                    let cap = if mix.weight > 0.0 { spec.max_torque } else { 0.0 };
+                    data.set_motor_max_force(rp::JointAxis::AngZ, cap as f32);
+                    m.torque[a] =
+                        sign * (kp * (mix.target() - th) - kd * om).clamp(-spec.max_torque, spec.max_torque);
+                    continue;
                 }
-            }
-            for t in 0..m.trees.len() {
-                let mb = physics.multibody_joints.get_multibody(m.trees[t].multibody).expect("multibody");
-                stable_pd(m, t, h, mb);
-            }
-        }
-
-        // Apply explicit torques as equal and opposite pairs.
-        let applies_torque = |rt: &ActuatorRt| {
-            matches!(mode, PdMode::Explicit | PdMode::OdeBrake | PdMode::StablePd) || rt.joint.is_none()
-        };
-        for (a, rt) in m.actuators.iter().enumerate() {
-            if !applies_torque(rt) {
-                continue;
-            }
-            let tau = (sign * m.torque[a]) as f32;
+                (PdMode::StablePd, Some((handle, dof))) => {
+                    // Tan, Liu & Turk's τ = −kp (q + h q̇ − q̄) − kd (q̇ + h q̈): the proportional part
+                    // as a torque, the damping part as Rapier's implicit joint damping, so that q̈
+                    // is Rapier's own articulated solve (gravity and Coriolis terms included).
+                    let (mb, _) = physics.multibody_joints.get_mut(handle).expect("joint");
+                    mb.damping_mut()[dof] = kd as f32;
+                    (kp * (mix.target() - th - h * om)).clamp(-spec.max_torque, spec.max_torque)
+                }
+                (PdMode::ImplicitSpring | PdMode::ImplicitMotor | PdMode::StablePd, None) => {
+                    // A body pair has no joint to host a spring, motor or damping: stable PD on its
+                    // own effective inertia I, τ = (kp (θ̄ − θ − h θ̇) − kd θ̇) / (1 + h kd / I).
+                    let i_eff = effective_inertia(&mut m.trees[rt.tree], &rt.selection);
+                    let t = (kp * (mix.target() - th - h * om) - kd * om) / (1.0 + h * kd / i_eff);
+                    t.clamp(-spec.max_torque, spec.max_torque)
+                }
+            };
+            m.torque[a] = sign * tau;
+            let tau = tau as f32;
             if tau != 0.0 {
                 physics.bodies[m.handles[rt.plus]].add_torque(rp::Vector::new(0.0, 0.0, tau), false);
                 physics.bodies[m.handles[rt.minus]].add_torque(rp::Vector::new(0.0, 0.0, -tau), false);
@@ -1010,6 +855,21 @@ impl World {
         let tree = &m.trees[m.body_tree[b]];
         let mb = self.physics.multibody_joints.get_multibody(tree.multibody).expect("multibody");
         m.body_angle_dofs[b].iter().map(|&d| coordinate(mb, d)).sum()
+    }
+
+    /// How far a model's motion has left the x–y plane: the largest |z| of a body centre (m) and
+    /// the largest tilt of a body's rotation axis away from z (rad, from the quaternion's x and y
+    /// parts). Both stay zero to round-off: the reduced coordinates have no out-of-plane freedom.
+    pub fn planar_deviation(&self, model: usize) -> Result<(f64, f64), BodyError> {
+        let m = self.model(model)?;
+        let (mut z, mut tilt) = (0.0f64, 0.0f64);
+        for &h in &m.handles {
+            let rb = &self.physics.bodies[h];
+            z = z.max(f64::from(rb.translation().z.abs()));
+            let q = rb.rotation();
+            tilt = tilt.max(2.0 * f64::from(q.x.hypot(q.y)));
+        }
+        Ok((z, tilt))
     }
 
     /// Momentum of a model's bodies (props included).
@@ -1179,6 +1039,79 @@ fn read_coordinates(mb: &rp::Multibody, q: &mut [f64], qd: &mut [f64]) {
     }
 }
 
+/// Coordinates and velocities of every tree, then each actuator's angle and rate (counter-clockwise).
+fn read_state(physics: &rp::PhysicsWorld, m: &mut Model) {
+    for tree in &mut m.trees {
+        let mb = physics.multibody_joints.get_multibody(tree.multibody).expect("multibody");
+        read_coordinates(mb, &mut tree.q, &mut tree.qd);
+    }
+    for (a, rt) in m.actuators.iter().enumerate() {
+        let t = &m.trees[rt.tree];
+        m.angle[a] = rt.selection.iter().map(|&(d, c)| c * t.q[d]).sum();
+        m.rate[a] = rt.selection.iter().map(|&(d, c)| c * t.qd[d]).sum();
+    }
+}
+
+/// The held signals → per actuator, the Eq. 5.1–5.2 average of clamped torques (explicit modes) and
+/// the linear mix of targets (all modes). Angles are counter-clockwise here; `sign` converts the
+/// model's convention. An actuator with a fixed target ignores the signals.
+fn gather_signals(m: &mut Model) {
+    let sk = &m.skeleton;
+    let mode = sk.actuation().mode;
+    let sign = m.sign;
+    // The ODE-style mode has kd = 0 in Eq. 2.1: its damping is the brake.
+    let kd_of = |kd: f64| if mode == PdMode::OdeBrake { 0.0 } else { kd };
+    for (a, spec) in sk.actuators().iter().enumerate() {
+        m.avg[a] = TorqueAverage::default();
+        m.mix[a] = TargetMix::default();
+        if let Some(fixed) = spec.fixed_target {
+            let target = sign * fixed;
+            let t = signal_torque(
+                Target::Angle(target),
+                target,
+                m.angle[a],
+                m.rate[a],
+                spec.kp,
+                kd_of(spec.kd),
+                spec.max_torque,
+            );
+            m.avg[a].add(t.unwrap_or(0.0), 1.0);
+            m.mix[a] = TargetMix { weight: 1.0, angle_weight: 1.0, weighted_angle: target };
+        }
+    }
+    for s in m.commands.signals() {
+        let a = s.actuator;
+        let spec = &sk.actuators()[a];
+        if spec.fixed_target.is_some() {
+            continue;
+        }
+        let rt = &m.actuators[a];
+        let target = match (s.target, s.frame, rt.parent) {
+            (Target::Angle(t), TargetFrame::World, Some(p)) => {
+                let tree = &m.trees[rt.tree];
+                sign * t - m.body_angle_dofs[p].iter().map(|&d| tree.q[d]).sum::<f64>()
+            }
+            (Target::Angle(t), _, _) => sign * t,
+            _ => 0.0,
+        };
+        if let Some(t) =
+            signal_torque(s.target, target, m.angle[a], m.rate[a], spec.kp, kd_of(spec.kd), spec.max_torque)
+        {
+            m.avg[a].add(t, s.weight);
+        }
+        let mix = &mut m.mix[a];
+        match s.target {
+            Target::Angle(_) => {
+                mix.weight += s.weight;
+                mix.angle_weight += s.weight;
+                mix.weighted_angle += s.weight * target;
+            }
+            Target::DampingOnly => mix.weight += s.weight,
+            Target::NoTorque => {}
+        }
+    }
+}
+
 /// M = Σ_links m Jᵥᵀ Jᵥ + I_zz J_θᵀ J_θ (planar rows only), and the generalised gravity force
 /// Σ_links −m g J_yᵀ into `tree.rhs`.
 fn assemble_mass_matrix(mb: &rp::Multibody, sk: &Skeleton, body_link: &[usize], tree: &mut Tree, g: f64) {
@@ -1223,94 +1156,4 @@ fn effective_inertia(tree: &mut Tree, selection: &[(usize, f64)]) -> f64 {
     tree.mass.solve(&mut tree.sol);
     let s_minv_s: f64 = selection.iter().map(|&(d, c)| c * tree.sol[d]).sum();
     1.0 / s_minv_s
-}
-
-/// Stable PD (Tan, Liu & Turk 2011) for one tree: with A = M + h Σ kd s sᵀ and
-/// p = Σ s [kp (θ̄ − θ − h θ̇) − kd θ̇] + g(q), predict q̈ from A q̈ = p, then
-/// τ = kp (θ̄ − θ − h θ̇) − kd (θ̇ + h sᵀ q̈), clamped. Gravity is in the prediction, Coriolis terms are
-/// not. Bodies touching the ground are held still in the prediction (J_c q̈ = 0 for their x, y and θ):
-/// without that, a foot on the floor is predicted to spin freely under the ankle torque, and the
-/// prediction shrinks the ankle torque by 1 + h·kd/I_foot, too weak to stand (see `docs/body.md`).
-fn stable_pd(m: &mut Model, t: usize, h: f64, mb: &rp::Multibody) {
-    let sk = &m.skeleton;
-    let tree = &mut m.trees[t];
-    if tree.actuators.is_empty() {
-        return;
-    }
-    for &a in &tree.actuators {
-        let spec = &sk.actuators()[a];
-        let mix = m.mix[a];
-        let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
-        let sel = &m.actuators[a].selection;
-        for &(i, ci) in sel {
-            for &(j, cj) in sel {
-                tree.mass.add(i, j, h * kd * ci * cj);
-            }
-        }
-        let p = kp * (mix.target() - m.angle[a] - h * m.rate[a]) - kd * m.rate[a];
-        for &(i, ci) in sel {
-            tree.rhs[i] += ci * p;
-        }
-    }
-    if !tree.mass.factorise() {
-        return;
-    }
-    tree.sol.copy_from_slice(&tree.rhs);
-    tree.mass.solve(&mut tree.sol);
-
-    // Contacts as equality constraints: q̈ = y − X λ with y = A⁻¹ p, X = A⁻¹ J_cᵀ and
-    // (J_c X) λ = J_c y.
-    let n = tree.ndofs;
-    let k = if std::env::var("SPD_FREE").is_ok() { 0 } else { 3 * tree.grounded.len() };
-    if k > 0 {
-        for (g, &b) in tree.grounded.iter().enumerate() {
-            let j = mb.body_jacobian(m.body_link[b]);
-            for (r, row) in [0usize, 1, 5].into_iter().enumerate() {
-                for c in 0..n {
-                    tree.jc[(3 * g + r) * n + c] = f64::from(j[(row, c)]);
-                }
-            }
-        }
-        for r in 0..k {
-            let (jr, xr) = (&tree.jc[r * n..(r + 1) * n], &mut tree.x[r * n..(r + 1) * n]);
-            xr.copy_from_slice(jr);
-            tree.mass.solve(xr);
-        }
-        tree.schur.reset(k);
-        let mut trace = 0.0;
-        for r in 0..k {
-            for c in 0..k {
-                let v: f64 = (0..n).map(|i| tree.jc[r * n + i] * tree.x[c * n + i]).sum();
-                tree.schur.add(r, c, v);
-                if r == c {
-                    trace += v;
-                }
-            }
-        }
-        // Two feet flat on the floor are a closed loop whose rows can be nearly dependent.
-        for r in 0..k {
-            tree.schur.add(r, r, 1e-9 * trace / k as f64);
-        }
-        if tree.schur.factorise() {
-            for r in 0..k {
-                tree.lambda[r] = (0..n).map(|i| tree.jc[r * n + i] * tree.sol[i]).sum();
-            }
-            tree.schur.solve(&mut tree.lambda[..k]);
-            for r in 0..k {
-                let l = tree.lambda[r];
-                for i in 0..n {
-                    tree.sol[i] -= tree.x[r * n + i] * l;
-                }
-            }
-        }
-    }
-
-    for &a in &tree.actuators {
-        let spec = &sk.actuators()[a];
-        let mix = m.mix[a];
-        let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
-        let acc: f64 = m.actuators[a].selection.iter().map(|&(d, c)| c * tree.sol[d]).sum();
-        let tau = kp * (mix.target() - m.angle[a] - h * m.rate[a]) - kd * (m.rate[a] + h * acc);
-        m.torque[a] = m.sign * tau.clamp(-spec.max_torque, spec.max_torque);
-    }
 }

@@ -169,6 +169,7 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
         write_frames: !args.no_frames,
         pictures: !args.no_pictures,
         progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        warn_stability: !args.quiet,
     };
     if !args.quiet {
         eprintln!(
@@ -270,6 +271,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         frame0: args.frame0,
         pictures: !args.no_pictures,
         progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        warn_stability: !args.quiet,
     };
     let n_frames = loaded.scene.n_frames();
     if !args.quiet {

@@ -25,12 +25,21 @@ pub struct RunOptions {
     pub pictures: bool,
     /// Show a progress bar on standard error.
     pub progress: bool,
+    /// Warn on standard error when the step is beyond the integrator's stability limit.
+    pub warn_stability: bool,
 }
 
 impl RunOptions {
     /// Nothing written, nothing shown: for tests and experiments that only want the numbers.
     pub fn quiet() -> Self {
-        Self { out_dir: None, write_frames: false, frame0: false, pictures: false, progress: false }
+        Self {
+            out_dir: None,
+            write_frames: false,
+            frame0: false,
+            pictures: false,
+            progress: false,
+            warn_stability: false,
+        }
     }
 }
 
@@ -120,6 +129,12 @@ pub fn run(
     let scene = &loaded.scene;
     let objects = loaded.objects.iter().map(|(_, m)| m.clone()).collect();
     let mut world = Flex3dWorld::new(scene, objects).context("building the scene")?;
+    if opts.progress || opts.warn_stability {
+        let omega = world.max_frequency();
+        if let Some(w) = anima_ode::stability::check_step(scene.integrator, scene.dt_s, omega) {
+            eprintln!("anima: warning: {w}");
+        }
+    }
     let n_frames = scene.n_frames();
     let n_steps = scene.n_steps();
     let particles = world.positions().len();

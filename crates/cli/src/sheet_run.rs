@@ -23,6 +23,8 @@ pub struct SheetRunOptions {
     pub write_frames: bool,
     pub pictures: bool,
     pub progress: bool,
+    /// Warn when the step is beyond the integrator's stability limit.
+    pub warn_stability: bool,
 }
 
 /// The JSON summary of a sheet run.
@@ -94,8 +96,17 @@ pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Res
     let n = net.n_particles();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
+    if opts.warn_stability {
+        let pinned = sim.network.pinned().to_vec();
+        let v = vec![DVec3::ZERO; n];
+        let omega = anima_ode::stability::max_frequency(&mut sim.network, 0.0, &sim.state.x, &v, &pinned, 60);
+        if let Some(w) = anima_ode::stability::check_step(scene.integrator, scene.dt_s, omega) {
+            eprintln!("anima: warning: {w}");
+        }
+    }
     let n_steps = (scene.duration_s / scene.dt_s).round() as usize;
-    let n_frames = (scene.duration_s * scene.frame_rate_hz).round() as usize;
+    // At least one frame, and the last frame is always the end of the run.
+    let n_frames = ((scene.duration_s * scene.frame_rate_hz).round() as usize).max(1);
     let bar = opts.progress.then(|| indicatif::ProgressBar::new(n_steps as u64));
     let mut snapshots: Vec<(usize, f64, Vec<DVec3>)> = Vec::new();
     let shown = crate::runner::sheet_frames(n_frames);
@@ -126,7 +137,11 @@ pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Res
         frames = n_frames;
     } else {
         for k in 1..=n_frames {
-            let target = ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps);
+            let target = if k == n_frames {
+                n_steps
+            } else {
+                ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
+            };
             if let Err(e) = sim.run(target - sim.steps_taken()) {
                 error = Some(e.to_string());
                 break;

@@ -107,3 +107,17 @@ fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_perc
         "measured {lo:.3e} s against predicted {predicted:.3e} s (ratio {ratio:.3})"
     );
 }
+
+#[test]
+fn gershgorin_bound_lies_above_the_power_iteration_estimate() {
+    use anima_ode::OdeSystem;
+    let spec = SheetSpec { n: 10, damping: 0.0, ..SheetSpec::standard(10) };
+    let mut net = spec.build();
+    let x = spec.positions();
+    let v = vec![DVec3::ZERO; x.len()];
+    let frozen = net.pinned().to_vec();
+    let estimate = max_frequency(&mut net, 0.0, &x, &v, &frozen, 300);
+    let bound = anima_ode::stability::gershgorin_frequency(net.linearized().unwrap(), 0.0, &x, &v);
+    assert!(estimate > 0.0 && bound >= estimate * 0.999, "estimate {estimate}, bound {bound}");
+    assert!(bound < 3.0 * estimate, "the bound should not be loose by more than 3×: {bound} vs {estimate}");
+}

@@ -54,7 +54,7 @@ impl MaterialMesh {
         let mesh = Self { rest, topology };
         for t in 0..mesh.n_faces() {
             let area = mesh.rest_area(t);
-            if !(area > 0.0) {
+            if area.is_nan() || area <= 0.0 {
                 return Err(MaterialMeshError::BadRestArea { triangle: t, area });
             }
         }

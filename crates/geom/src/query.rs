@@ -96,6 +96,7 @@ impl std::fmt::Debug for MeshSolid {
 
 /// A static solid a cloth can collide with.
 #[derive(Debug, Clone)]
+#[expect(clippy::large_enum_variant, reason = "a scene holds a handful of solids; boxing buys nothing")]
 pub enum Solid {
     Sphere(Sphere),
     HalfSpace(HalfSpace),
@@ -250,7 +251,7 @@ impl MeshSolid {
             return Err(SolidError::Open(open));
         }
         let volume = mesh.signed_volume();
-        if !(volume > 0.0) {
+        if volume.is_nan() || volume <= 0.0 {
             return Err(SolidError::InsideOut(volume));
         }
         let normals = (0..mesh.n_triangles())

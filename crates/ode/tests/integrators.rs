@@ -185,3 +185,12 @@ fn implicit_euler_refuses_a_system_without_jacobians() {
     let mut next = State::zeros(1);
     assert!(st.step(&mut Spring, 0.0, 0.1, &now, &mut next).is_err());
 }
+
+#[test]
+fn step_warning_fires_beyond_the_stability_limit_only() {
+    use anima_ode::stability::check_step;
+    assert!(check_step(Integrator::SymplecticEuler, 1.9, 1.0).is_none());
+    let w = check_step(Integrator::SymplecticEuler, 2.1, 1.0).expect("beyond 2/ω");
+    assert!(w.contains("exceeds the stable step"), "{w}");
+    assert!(check_step(Integrator::ImplicitEuler, 100.0, 1.0).is_none());
+}

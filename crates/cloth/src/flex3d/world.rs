@@ -615,6 +615,19 @@ impl Flex3dWorld {
         }
     }
 
+    /// Largest frequency ω_max of the model at the current state (power iteration on the acceleration's
+    /// finite differences; pinned particles excluded), for the stability warning of explicit methods.
+    pub fn max_frequency(&mut self) -> f64 {
+        let t = self.time();
+        let pinned = self.model.pinned.clone();
+        anima_ode::stability::max_frequency(&mut self.model, t, &self.now.x, &self.now.v, &pinned, 60)
+    }
+
+    /// The scene's integrator.
+    pub fn integrator(&self) -> anima_ode::Integrator {
+        self.stepper.integrator()
+    }
+
     /// Steps until `steps_taken() == target` (no-op if already there or past it).
     pub fn run_to_step(&mut self, target: usize) -> Result<(), StepError> {
         while self.step < target {

@@ -101,7 +101,7 @@ pub fn place_mesh(
     let rotated: Vec<DVec3> = mesh.vertices().iter().map(|&p| to_z_up(up, p)).collect();
     let b = Aabb::from_points(rotated.iter().copied());
     let extent = b.size().x.max(b.size().y);
-    if !(extent > 0.0) {
+    if extent.is_nan() || extent <= 0.0 {
         return Err("the mesh has no horizontal extent".to_owned());
     }
     let scale = length / extent;
@@ -447,6 +447,7 @@ const MAX_RECHECKS: usize = 3;
 /// and answered the same way (up to [`MAX_RECHECKS`] times; then the particle stays at x^t at rest).
 /// Returns the number of particles hit.
 #[expect(clippy::too_many_arguments, reason = "disjoint borrows of the cloth's fields")]
+#[expect(clippy::needless_range_loop, reason = "i indexes the two states and the clearances alike")]
 fn respond_to_hits(
     colliders: &[Collider],
     now: &State<DVec3>,

@@ -97,7 +97,6 @@ impl Springs {
 /// K_ij = k^e [u uᵀ + (1 − L⁰/|d|)(I − u uᵀ)] while the elastic force acts, and
 /// D_ij = k^d u uᵀ while the damper acts. The damper's dependence on position is left out, as usual
 /// (Baraff & Witkin 1998), which keeps both blocks symmetric.
-#[expect(clippy::too_many_arguments, reason = "the same arguments as spring_force")]
 pub fn spring_jacobians(
     xi: DVec3,
     xj: DVec3,
