@@ -247,3 +247,28 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
     ));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn edge_contacts_hold_an_edge_that_spans_a_small_ball() {
+    // One square of cloth, its diagonal from (−0.5, −0.5) to (0.5, 0.5) passing 1 mm over a 5 cm ball:
+    // no particle lies over the ball, so only the edge test can stop the diagonal.
+    let mut s = incline(0.4, 0.0);
+    s.cloth.size_m = 1.0;
+    s.cloth.height = Height::At { z_m: 0.051 };
+    s.objects = vec![ObjectDesc {
+        name: "ball".into(),
+        friction: 0.4,
+        shape: ShapeDesc::Sphere { centre_m: DVec3::ZERO, radius_m: 0.05 },
+    }];
+    let diagonal_height = |edge_contacts: bool| {
+        let mut scene = s.clone();
+        scene.options.edge_contacts = edge_contacts;
+        let mut cloth = OliveiraCloth::new(&scene, vec![]).unwrap();
+        run_checking(&mut cloth, 0.3, 1, "ball");
+        let x = cloth.positions();
+        (x[0].z + x[3].z) / 2.0
+    };
+    let (held, fell) = (diagonal_height(true), diagonal_height(false));
+    assert!(held > 0.04, "with edge contacts the diagonal's ends sank to {held}");
+    assert!(fell < -0.1, "without them the cloth should fall past the ball, got {fell}");
+}

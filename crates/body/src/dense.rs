@@ -48,6 +48,7 @@ impl SpdSystem {
     }
 
     /// Solves A x = b in place after [`SpdSystem::factorise`].
+    #[expect(clippy::needless_range_loop, reason = "index form mirrors the triangular substitutions")]
     pub fn solve(&self, x: &mut [f64]) {
         let n = self.n;
         for i in 0..n {
@@ -77,16 +78,16 @@ mod tests {
         let a = [[4.0, 2.0, 0.0], [2.0, 5.0, 1.0], [0.0, 1.0, 3.0]];
         let x = [1.0, -2.0, 3.0];
         let mut sys = SpdSystem::new(3);
-        for i in 0..3 {
-            for j in 0..3 {
-                sys.add(i, j, a[i][j]);
+        for (i, row) in a.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                sys.add(i, j, v);
             }
         }
         let mut b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i][j] * x[j]).sum()).collect();
         assert!(sys.factorise());
         sys.solve(&mut b);
-        for i in 0..3 {
-            assert!((b[i] - x[i]).abs() < 1e-12, "x[{i}] = {}", b[i]);
+        for (i, (bi, xi)) in b.iter().zip(x).enumerate() {
+            assert!((bi - xi).abs() < 1e-12, "x[{i}] = {bi}");
         }
     }
 

@@ -159,7 +159,20 @@ pub(crate) fn field_sites(text: &str) -> Vec<FieldSite> {
 
 /// The path of the innermost field being read at 1-based (`line`, `column`), e.g. `bodies[3].mass`.
 pub(crate) fn path_at(text: &str, line: usize, column: usize) -> String {
-    scan(text, offset_of(text, line, column)).1
+    // An error that points at a field name (an unknown field) belongs to that field: read through
+    // the name and its colon.
+    let bytes = text.as_bytes();
+    let mut stop = offset_of(text, line, column);
+    let start = stop;
+    while stop < bytes.len() && (bytes[stop].is_ascii_alphanumeric() || bytes[stop] == b'_') {
+        stop += 1;
+    }
+    let mut colon = stop;
+    while colon < bytes.len() && (bytes[colon] == b' ' || bytes[colon] == b'\t') {
+        colon += 1;
+    }
+    let stop = if stop > start && bytes.get(colon) == Some(&b':') { colon + 1 } else { start };
+    scan(text, stop).1
 }
 
 /// The line of `path` in `text`: the site of exactly that path, else of its longest prefix that names

@@ -327,8 +327,8 @@ pub mod catalogue {
         on(l.min(r) - s.facing * s.body_position[p][0] > tol)
     }
 
-    /// S-FOOTONHANDS: 1 if one foot of the acrobat touches both hands of the pusher (model
-    /// `pusher_model`, hand bodies from `pusher`'s layout).
+    /// S-FOOTONHANDS: 1 if one foot of the acrobat touches both hands of the pusher (the model and
+    /// hand bodies of the `pusher` reading).
     pub fn foot_on_hands(acrobat: &Sensors, pusher: &Sensors) -> f64 {
         let [Some(hl), Some(hr)] = pusher.layout.hands else { return 0.0 };
         let (hl, hr) =

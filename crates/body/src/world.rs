@@ -248,8 +248,10 @@ fn v3(x: f64, y: f64) -> rp::Vector {
 impl World {
     pub fn new(settings: WorldSettings) -> Result<Self, BodyError> {
         settings.check()?;
-        let mut physics = rp::PhysicsWorld::default();
-        physics.gravity = rp::Vector::new(0.0, -settings.gravity as f32, 0.0);
+        let mut physics = rp::PhysicsWorld {
+            gravity: rp::Vector::new(0.0, -settings.gravity as f32, 0.0),
+            ..rp::PhysicsWorld::default()
+        };
         let p = &mut physics.integration_parameters;
         p.dt = settings.physics_dt() as f32;
         p.num_solver_iterations = settings.solver.iterations as usize;

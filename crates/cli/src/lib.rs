@@ -2,6 +2,7 @@
 //! xtask and the integration tests drive scenes through the same code, so what they measure is what a
 //! user runs.
 
+pub mod body_run;
 pub mod experiments;
 pub mod output;
 pub mod picture;

@@ -21,7 +21,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Simulate a scene (.par or .ron) and write its frames, pictures and a JSON summary.
+    /// Simulate a scene (.par, .ron or a body scene .ron) and write its frames, pictures and a JSON summary.
     ///
     /// Without a scene file, runs the built-in default: the FLEX3D tablecloth falling on a table
     /// (Nedel 1993, Fig. A2.8).
@@ -205,6 +205,18 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
 }
 
 fn run_command(args: RunArgs) -> Result<ExitCode> {
+    // A RON file whose top-level value is `BodyScene(…)` is an articulated-figure scene.
+    if let Some(path) = args.scene.as_deref().filter(|p| anima::body_run::is_body_scene_file(p)) {
+        let progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
+        let opts = anima::body_run::BodyRunOptions {
+            out_dir: Some(args.out.clone()),
+            pictures: !args.no_pictures,
+            dt: args.dt,
+            duration: args.duration,
+            progress,
+        };
+        return anima::body_run::run_command(path, &args.out, args.summary.as_deref(), opts, args.quiet);
+    }
     if let Some(path) =
         args.scene.as_ref().filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")))
     {

@@ -215,10 +215,7 @@ impl NetworkSim {
     fn resolve_contacts(&mut self) -> bool {
         let mut any = false;
         let pinned = self.network.pinned();
-        for p in 0..self.state.x.len() {
-            if pinned[p] {
-                continue;
-            }
+        for (p, _) in pinned.iter().enumerate().filter(|(_, pin)| !**pin) {
             let from = self.scratch.x[p];
             for c in &self.colliders {
                 let contact = c

@@ -12,6 +12,7 @@
 //! - [`Image::grid`] tiles frames into a sheet; [`Image::label`] writes text on a picture.
 
 mod camera;
+mod draw2d;
 mod error;
 mod image;
 mod plot;
@@ -24,6 +25,7 @@ mod preview;
 
 pub use anima_geom::{Aabb, DVec3};
 pub use camera::{Camera, Projection};
+pub use draw2d::{View2d, draw_line, fill_disc, fill_polygon, stroke_polygon};
 pub use error::VizError;
 pub use image::Image;
 pub use plot::{LegendPosition, LinePlot, PALETTE, Series, SeriesStyle};

@@ -10,10 +10,10 @@ use anima_geom::{
 use anima_ode::{OdeError, State, Stepper};
 
 use super::bending::BendingElements;
-use super::contact::{Collider, contact_velocity};
+use super::contact::{Collider, ContactPass};
 use super::forces::ClothModel;
 use super::material::Material;
-use super::scene::{Centre, ContactVelocity, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
+use super::scene::{Centre, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
 use super::springs::Springs;
 
 /// Why a scene could not be built.
@@ -60,6 +60,8 @@ pub struct OliveiraCloth {
     colliders: Vec<Collider>,
     /// Per particle, a lower bound on its distance from every surface (see `Options::cull_collision_tests`).
     clearance: Vec<f64>,
+    /// Per particle, whether the contact pass has answered it this step.
+    responded: Vec<bool>,
     material: Material,
     restitution: f64,
     rule: StepRule,
@@ -264,6 +266,7 @@ impl OliveiraCloth {
             now: State::new(x, vec![DVec3::ZERO; n_vertices]),
             next: State::zeros(n_vertices),
             clearance: vec![0.0; n_vertices],
+            responded: vec![false; n_vertices],
             colliders,
             material,
             restitution: scene.restitution,
@@ -296,16 +299,21 @@ impl OliveiraCloth {
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         let dt = self.next_dt();
         self.stepper.step(&mut self.model, self.time, dt, &self.now, &mut self.next)?;
-        let hits = respond_to_hits(
-            &self.colliders,
-            &self.now,
-            &mut self.next,
-            &mut self.clearance,
+        let pass = ContactPass {
+            colliders: &self.colliders,
             dt,
-            self.restitution,
-            self.material.friction,
-            &self.options,
-        );
+            restitution: self.restitution,
+            friction: self.material.friction,
+            options: &self.options,
+        };
+        let mut hits = 0;
+        if !self.colliders.is_empty() {
+            hits = pass.particles(&self.now, &mut self.next, &mut self.clearance, &mut self.responded);
+            if self.options.edge_contacts {
+                let ends = &self.model.springs.ends;
+                hits += pass.edges(ends, &self.now, &mut self.next, &mut self.clearance, &mut self.responded);
+            }
+        }
         if hits > 0 {
             self.first_collision.get_or_insert(self.time + dt);
             self.total_hits += hits as u64;
@@ -425,83 +433,26 @@ impl OliveiraCloth {
     }
 }
 
-/// The first crossing of the segment a → b with any object: (path parameter, unit outward normal,
-/// object index), ties going to the earlier object.
-fn first_hit(colliders: &[Collider], a: DVec3, b: DVec3) -> Option<(f64, DVec3, usize)> {
-    let mut first: Option<(f64, DVec3, usize)> = None;
-    for (k, o) in colliders.iter().enumerate() {
-        if let Some(hit) = o.solid.segment_hit(a, b)
-            && first.is_none_or(|(s, _, _)| hit.s < s)
-        {
-            first = Some((hit.s, hit.normal, k));
-        }
-    }
-    first
-}
+#[cfg(test)]
+mod tests {
+    use anima_geom::box_mesh;
 
-/// How many times a corrected path is re-tested before the particle is held where it started.
-const MAX_RECHECKS: usize = 3;
+    use super::*;
 
-/// Casts each particle's path over the step against every object and answers the first hit with
-/// Eqs. 4.16–4.18. With `Options::recheck_corrected_path`, the corrected path x^t → x̄ is cast again
-/// and answered the same way (up to [`MAX_RECHECKS`] times; then the particle stays at x^t at rest).
-/// Returns the number of particles hit.
-#[expect(clippy::too_many_arguments, reason = "disjoint borrows of the cloth's fields")]
-#[expect(clippy::needless_range_loop, reason = "i indexes the two states and the clearances alike")]
-fn respond_to_hits(
-    colliders: &[Collider],
-    now: &State<DVec3>,
-    next: &mut State<DVec3>,
-    clearance: &mut [f64],
-    dt: f64,
-    restitution: f64,
-    cloth_friction: f64,
-    options: &Options,
-) -> usize {
-    if colliders.is_empty() {
-        return 0;
-    }
-    let mut hits = 0;
-    for i in 0..now.x.len() {
-        let (a, b) = (now.x[i], next.x[i]);
-        let path = a.distance(b);
-        if options.cull_collision_tests && path < clearance[i] {
-            clearance[i] -= path;
-            continue;
+    #[test]
+    fn placed_meshes_stand_on_their_base_scaled_and_still_outward() {
+        // A 4 × 1 × 2 box (x × y × z).
+        let b = box_mesh(DVec3::new(1.0, 2.0, 3.0), DVec3::new(5.0, 3.0, 5.0));
+        for up in [UpAxis::X, UpAxis::Y, UpAxis::Z] {
+            let m = place_mesh(&b, up, 0.5, DVec3::new(0.1, 0.2, 0.3)).unwrap();
+            let bb = m.aabb();
+            assert!((bb.min.z - 0.3).abs() < 1e-12, "{up:?}: bottom at {}", bb.min.z);
+            assert!((bb.centre().truncate() - DVec2::new(0.1, 0.2)).length() < 1e-12, "{up:?}");
+            assert!((bb.size().x.max(bb.size().y) - 0.5).abs() < 1e-12, "{up:?}");
+            assert!(MeshSolid::new(&m).is_ok(), "{up:?}: the rotation must keep the winding outward");
         }
-        let Some((_, mut normal, mut k)) = first_hit(colliders, a, b) else {
-            if options.cull_collision_tests {
-                // A little less than the distance, so round-off in it cannot let a path through.
-                let d = colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
-                clearance[i] = d * (1.0 - 1e-9) - 1e-12;
-            }
-            continue;
-        };
-        let mut v = match options.contact_velocity {
-            ContactVelocity::StartOfStep => now.v[i],
-            ContactVelocity::EndOfStep => next.v[i],
-        };
-        let mut x = a;
-        for attempt in 0..=MAX_RECHECKS {
-            let mu = 0.5 * (cloth_friction + colliders[k].friction);
-            v = contact_velocity(v, normal, restitution, mu, options.separating);
-            x = a + v * dt;
-            if !options.recheck_corrected_path {
-                break;
-            }
-            match first_hit(colliders, a, x) {
-                None => break,
-                Some(_) if attempt == MAX_RECHECKS => {
-                    // Wedged in a crease: every corrected path crosses a surface.
-                    (x, v) = (a, DVec3::ZERO);
-                }
-                Some((_, n, obj)) => (normal, k) = (n, obj),
-            }
-        }
-        next.v[i] = v;
-        next.x[i] = x;
-        clearance[i] = 0.0;
-        hits += 1;
+        // Y up: the box's 1-unit y side becomes its height (0.5/4 of it after scaling to 0.5 m).
+        let m = place_mesh(&b, UpAxis::Y, 0.5, DVec3::ZERO).unwrap();
+        assert!((m.aabb().size().z - 0.125).abs() < 1e-12);
     }
-    hits
 }

@@ -4,8 +4,9 @@
 //! and Anderson (2002), and restarts from where it began the step.
 
 use anima_geom::{DVec3, Solid};
+use anima_ode::State;
 
-use super::scene::SeparatingContact;
+use super::scene::{ContactVelocity, Options, SeparatingContact};
 
 /// A static object as the cloth sees it.
 #[derive(Debug, Clone)]
@@ -46,6 +47,203 @@ pub fn contact_velocity(
     n * v_r.dot(n) + v_t_after
 }
 
+/// The first crossing of the segment a → b with any object: (path parameter, unit outward normal,
+/// object index), ties going to the earlier object.
+pub fn first_hit(colliders: &[Collider], a: DVec3, b: DVec3) -> Option<(f64, DVec3, usize)> {
+    let mut first: Option<(f64, DVec3, usize)> = None;
+    for (k, o) in colliders.iter().enumerate() {
+        if let Some(hit) = o.solid.segment_hit(a, b)
+            && first.is_none_or(|(s, _, _)| hit.s < s)
+        {
+            first = Some((hit.s, hit.normal, k));
+        }
+    }
+    first
+}
+
+/// How many times a corrected path is re-tested before the particle is held where it started.
+pub const MAX_RECHECKS: usize = 3;
+
+/// The collision pass after one step: everything it reads, borrowed from the cloth.
+#[derive(Debug, Clone, Copy)]
+pub struct ContactPass<'a> {
+    pub colliders: &'a [Collider],
+    pub dt: f64,
+    /// γ of Eq. 4.16.
+    pub restitution: f64,
+    /// μ of the cloth.
+    pub friction: f64,
+    pub options: &'a Options,
+}
+
+impl ContactPass<'_> {
+    /// The new state of a particle that starts the step at `x0` with velocity `v` and hits object `k`
+    /// with outward normal `normal`: Eqs. 4.16–4.17 for the velocity, x̄ = x0 + v̄·Δt (Eq. 4.18). With
+    /// `Options::recheck_corrected_path` the corrected path x0 → x̄ is cast again and a crossing is
+    /// answered the same way (up to [`MAX_RECHECKS`] times; after that the particle stays at x0 at rest).
+    pub fn resolve(&self, x0: DVec3, mut v: DVec3, mut normal: DVec3, mut k: usize) -> (DVec3, DVec3) {
+        let mut x = x0;
+        for attempt in 0..=MAX_RECHECKS {
+            let mu = 0.5 * (self.friction + self.colliders[k].friction);
+            v = contact_velocity(v, normal, self.restitution, mu, self.options.separating);
+            x = x0 + v * self.dt;
+            if !self.options.recheck_corrected_path {
+                break;
+            }
+            match first_hit(self.colliders, x0, x) {
+                None => break,
+                Some(_) if attempt == MAX_RECHECKS => {
+                    // Wedged in a crease: every corrected path crosses a surface.
+                    (x, v) = (x0, DVec3::ZERO);
+                }
+                Some((_, n, obj)) => (normal, k) = (n, obj),
+            }
+        }
+        (x, v)
+    }
+
+    fn velocity_before(&self, now: &State<DVec3>, next: &State<DVec3>, i: usize) -> DVec3 {
+        match self.options.contact_velocity {
+            ContactVelocity::StartOfStep => now.v[i],
+            ContactVelocity::EndOfStep => next.v[i],
+        }
+    }
+
+    /// Type-2 tests (§4.4.2.1): casts each particle's path x^t → x over the step and answers the first
+    /// hit. A path shorter than the particle's `clearance` (a lower bound on its distance from every
+    /// surface) cannot hit and is not cast when `Options::cull_collision_tests` is on. Marks the particles
+    /// hit in `responded` and returns how many there were.
+    pub fn particles(
+        &self,
+        now: &State<DVec3>,
+        next: &mut State<DVec3>,
+        clearance: &mut [f64],
+        responded: &mut [bool],
+    ) -> usize {
+        let cull = self.options.cull_collision_tests;
+        let mut hits = 0;
+        for i in 0..now.x.len() {
+            responded[i] = false;
+            let (a, b) = (now.x[i], next.x[i]);
+            let path = a.distance(b);
+            if cull && path < clearance[i] {
+                clearance[i] -= path;
+                continue;
+            }
+            let Some((_, normal, k)) = first_hit(self.colliders, a, b) else {
+                if cull {
+                    // A little less than the distance, so round-off in it cannot let a path through.
+                    let d = self.colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
+                    clearance[i] = d * (1.0 - 1e-9) - 1e-12;
+                }
+                continue;
+            };
+            (next.x[i], next.v[i]) = self.resolve(a, self.velocity_before(now, next, i), normal, k);
+            clearance[i] = 0.0;
+            responded[i] = true;
+            hits += 1;
+        }
+        hits
+    }
+
+    /// Type-1 tests answered as the thesis answers edges that may no longer be refined (§4.4.2.1,
+    /// each edge's segment at the end of the step is cast against the objects, and on a hit
+    /// both endpoints not already answered this step are treated as type-2 hits on that face, from their
+    /// start-of-step state. Returns how many endpoints were answered.
+    pub fn edges(
+        &self,
+        ends: &[[u32; 2]],
+        now: &State<DVec3>,
+        next: &mut State<DVec3>,
+        clearance: &mut [f64],
+        responded: &mut [bool],
+    ) -> usize {
+        let cull = self.options.cull_collision_tests;
+        let mut answered = 0;
+        for &[a, b] in ends {
+            let (a, b) = (a as usize, b as usize);
+            let (xa, xb) = (next.x[a], next.x[b]);
+            // Every point of the edge is within |e| of both ends in total, so it cannot reach a
+            // surface when their clearances add up to more than its length.
+            if cull && clearance[a] + clearance[b] > xa.distance(xb) {
+                continue;
+            }
+            let Some((_, normal, k)) = first_hit(self.colliders, xa, xb) else { continue };
+            for i in [a, b] {
+                if !responded[i] {
+                    (next.x[i], next.v[i]) =
+                        self.resolve(now.x[i], self.velocity_before(now, next, i), normal, k);
+                    clearance[i] = 0.0;
+                    responded[i] = true;
+                    answered += 1;
+                }
+            }
+        }
+        answered
+    }
+}
+
+/// Approximate vertex normals (§4.5.1.3): the sum of the unit normals of the triangles around each
+/// vertex, normalised (the sum of unit normals, spec Q-8); zero for a vertex with no proper triangle.
+pub fn vertex_normals(triangles: &[[u32; 3]], x: &[DVec3], out: &mut [DVec3]) {
+    out.fill(DVec3::ZERO);
+    for &[a, b, c] in triangles {
+        let (a, b, c) = (a as usize, b as usize, c as usize);
+        let n = (x[b] - x[a]).cross(x[c] - x[a]).normalize_or_zero();
+        out[a] += n;
+        out[b] += n;
+        out[c] += n;
+    }
+    for n in out.iter_mut() {
+        *n = n.normalize_or_zero();
+    }
+}
+
+/// Type-3 response (§4.4.2.1, A-23) for a particle found inside `solid` (in the thesis, a particle just
+/// inserted by remeshing), from its position `x` and velocity `v`. The hit point is unknown, so the
+/// normal is the particle's own vertex normal turned against its motion (towards the outside of the
+/// solid's centre when it does not move across it); then Eqs. 4.16–4.18 with x^t = x. A particle that is
+/// still inside (Eq. 4.16 cannot move one at rest) is moved along that normal to just past where a ray
+/// from it leaves the solid, keeping the new velocity.
+#[expect(clippy::too_many_arguments, reason = "the particle, the solid and the three response constants")]
+pub fn push_out(
+    solid: &Solid,
+    x: DVec3,
+    v: DVec3,
+    vertex_normal: DVec3,
+    dt: f64,
+    restitution: f64,
+    mu: f64,
+    separating: SeparatingContact,
+) -> (DVec3, DVec3) {
+    let nv = vertex_normal.normalize_or_zero();
+    let along = nv.dot(v);
+    let n = if along > 0.0 {
+        -nv
+    } else if along < 0.0 {
+        nv
+    } else {
+        let centre = solid.aabb().centre();
+        let away = if centre.is_finite() { x - centre } else { solid.proximity(x).point - x };
+        if nv.dot(away) < 0.0 { -nv } else { nv }
+    };
+    let n = if n == DVec3::ZERO { (solid.proximity(x).point - x).normalize_or(DVec3::Z) } else { n };
+    let v_new = contact_velocity(v, n, restitution, mu, separating);
+    let mut x_new = x + v_new * dt;
+    if solid.contains(x_new) {
+        let reach = solid.aabb().diagonal_length();
+        let reach = if reach.is_finite() { reach } else { solid.proximity(x_new).distance * 2.0 + 1.0 };
+        x_new = match solid.ray_hit(x_new, n, reach + 1.0) {
+            Some(exit) => exit.point + n * 1e-9,
+            None => {
+                let p = solid.proximity(x_new).point;
+                p + (p - x_new).normalize_or(n) * 1e-9
+            }
+        };
+    }
+    (x_new, v_new)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,5 +272,43 @@ mod tests {
         // As printed: the normal part turns into the surface and friction speeds the slide up.
         let lit = contact_velocity(v, DVec3::Z, 0.5, 0.4, SeparatingContact::Literal);
         assert!((lit - DVec3::new(1.3, 0.0, -0.25)).length() < 1e-15, "{lit}");
+    }
+
+    #[test]
+    fn push_out_leaves_the_solid() {
+        use anima_geom::Sphere;
+        let ball = Solid::Sphere(Sphere { centre: DVec3::ZERO, radius: 0.25 });
+        // At rest just under the top: Eq. 4.16 cannot move it, so it is moved past the exit point.
+        let (x, v) = push_out(
+            &ball,
+            DVec3::new(0.0, 0.0, 0.24),
+            DVec3::ZERO,
+            DVec3::Z,
+            1e-3,
+            0.5,
+            0.2,
+            SeparatingContact::KeepVelocity,
+        );
+        assert!(!ball.contains(x) && (x.z - 0.25).abs() < 1e-6 && v == DVec3::ZERO, "{x} {v}");
+        // Moving down with its normal up: the velocity turns up, then the position is made outside.
+        let (x, v) = push_out(
+            &ball,
+            DVec3::new(0.05, 0.0, 0.2),
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::Z,
+            1e-3,
+            0.5,
+            0.2,
+            SeparatingContact::KeepVelocity,
+        );
+        assert!(!ball.contains(x) && v.z > 0.0, "{x} {v}");
+    }
+
+    #[test]
+    fn vertex_normals_of_a_flat_sheet_point_up() {
+        let x = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        let mut n = [DVec3::ZERO; 4];
+        vertex_normals(&[[0, 1, 2], [0, 2, 3]], &x, &mut n);
+        assert!(n.iter().all(|v| (*v - DVec3::Z).length() < 1e-15), "{n:?}");
     }
 }

@@ -191,6 +191,11 @@ pub struct Options {
     /// velocity without testing that path, which on a concave surface (the Bunny's creases, where it
     /// meets the floor) can carry it through a neighbouring face. Off gives the thesis's rule as printed.
     pub recheck_corrected_path: bool,
+    /// Also cast every edge at the end of the step and answer a hit on both its ends as particle hits
+    /// the thesis does this for colliding edges that remeshing may not refine further, and
+    /// on a static mesh no edge can be refined). Off by default: the thesis's static reference runs do
+    /// no remeshing pass, so no edge tests.
+    pub edge_contacts: bool,
     /// Skip the exact path test of a particle whose path cannot reach any object (its length is below
     /// a lower bound on its distance from every surface). Changes no result; off only to check that.
     pub cull_collision_tests: bool,
@@ -205,6 +210,7 @@ impl Options {
             contact_velocity: ContactVelocity::StartOfStep,
             separating: SeparatingContact::KeepVelocity,
             recheck_corrected_path: true,
+            edge_contacts: false,
             cull_collision_tests: true,
         }
     }
