@@ -52,6 +52,35 @@ pub struct ModelSummary {
     pub max_joint_angle: f64,
     /// Only feet touched the ground during the whole run.
     pub only_feet_touched: bool,
+    /// The hip: the lowest joint anchor on the pelvis (the root body when no body is the pelvis),
+    /// i.e. the torso's base. Its height at the start and the end, m, and the lowest seen.
+    pub initial_hip_height_m: f64,
+    pub hip_height_m: f64,
+    pub min_hip_height_m: f64,
+    /// The pelvis's final world angle about z (pitch), rad, counter-clockwise, 0 in the initial
+    /// configuration; and the largest |pitch| seen.
+    pub hip_pitch_rad: f64,
+    pub max_abs_hip_pitch_rad: f64,
+}
+
+/// The body whose base is the hip and the hip's offset from that body's centre in the initial
+/// configuration (where every angle is 0): the pelvis (or first root) and its lowest joint anchor.
+fn hip_reference(sk: &Skeleton, s: &Sensors) -> (usize, [f64; 2]) {
+    let body = s.layout.pelvis.unwrap_or(sk.roots()[0]);
+    let centre = sk.body(body).centre;
+    let anchor = (0..sk.n_joints())
+        .filter(|&j| sk.joint_bodies(j).0 == body)
+        .map(|j| sk.desc().joints[j].anchor)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or(centre);
+    (body, [anchor.0 - centre.0, anchor.1 - centre.1])
+}
+
+/// The hip's world height, m, and the hip body's pitch, rad.
+fn hip_height_pitch(s: &Sensors, (body, offset): (usize, [f64; 2])) -> (f64, f64) {
+    let th = s.body_angle[body];
+    let (sin, cos) = th.sin_cos();
+    (s.body_position[body][1] + sin * offset[0] + cos * offset[1], th)
 }
 
 /// The JSON summary of a body run.
@@ -114,9 +143,13 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
     let mut sensors: Vec<Sensors> =
         (0..n_models).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
     let mut stats: Vec<ModelSummary> = Vec::with_capacity(n_models);
+    let mut hips = Vec::with_capacity(n_models);
     for (m, s) in sensors.iter_mut().enumerate() {
         world.sense(s)?;
         let sk = world.skeleton(m)?;
+        let hip = hip_reference(sk, s);
+        hips.push(hip);
+        let (hip_height, hip_pitch) = hip_height_pitch(s, hip);
         stats.push(ModelSummary {
             name: sk.name().into(),
             pd_mode: format!("{:?}", sk.actuation().mode),
@@ -130,6 +163,11 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
             max_com_drift: 0.0,
             max_joint_angle: 0.0,
             only_feet_touched: true,
+            initial_hip_height_m: hip_height,
+            hip_height_m: hip_height,
+            min_hip_height_m: hip_height,
+            hip_pitch_rad: hip_pitch,
+            max_abs_hip_pitch_rad: hip_pitch.abs(),
         });
     }
 
@@ -167,7 +205,7 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
             world.sense(s)?;
             all_finite &= s.all_finite();
             let sk = world.skeleton(m)?;
-            update_stats(&mut stats[m], s, sk);
+            update_stats(&mut stats[m], s, sk, hips[m]);
         }
         if out.is_some() && k % frame_every == 0 {
             let t0 = Instant::now();
@@ -211,7 +249,12 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
     })
 }
 
-fn update_stats(st: &mut ModelSummary, s: &Sensors, sk: &Skeleton) {
+fn update_stats(st: &mut ModelSummary, s: &Sensors, sk: &Skeleton, hip: (usize, [f64; 2])) {
+    let (hip_height, hip_pitch) = hip_height_pitch(s, hip);
+    st.hip_height_m = hip_height;
+    st.min_hip_height_m = st.min_hip_height_m.min(hip_height);
+    st.hip_pitch_rad = hip_pitch;
+    st.max_abs_hip_pitch_rad = st.max_abs_hip_pitch_rad.max(hip_pitch.abs());
     let head = s.layout.head.map_or_else(
         || s.body_position.iter().map(|p| p[1]).fold(f64::NEG_INFINITY, f64::max),
         |h| s.body_position[h][1],
@@ -340,8 +383,16 @@ pub fn run_command(
     if !quiet {
         for m in &s.models {
             eprintln!(
-                "anima: {} ({}, G = {}): head lowest {:.3} m, centre of mass moved {:.3} m",
-                m.name, m.pd_mode, m.gain_scale, m.min_head_height, m.max_com_drift
+                "anima: {} ({}, G = {}): head lowest {:.3} m, centre of mass moved {:.3} m; \
+                 hip {:.4} m (from {:.4}), pitch {:.2e} rad",
+                m.name,
+                m.pd_mode,
+                m.gain_scale,
+                m.min_head_height,
+                m.max_com_drift,
+                m.hip_height_m,
+                m.initial_hip_height_m,
+                m.hip_pitch_rad
             );
         }
         eprintln!(
@@ -397,5 +448,19 @@ mod tests {
             assert_eq!(&bytes[1..4], b"PNG");
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_standard_biped_scene_reports_hip_height_and_pitch() {
+        let (scene, skeletons) = load(&asset("assets/scenes/standard-biped.ron")).unwrap();
+        assert_eq!(scene.n_steps(), 10_000, "10 s at 1 ms");
+        let opts =
+            BodyRunOptions { out_dir: None, pictures: false, dt: None, duration: Some(1.0), progress: false };
+        let s = run(&scene, &skeletons, &opts).unwrap();
+        assert_eq!(s.steps, 1000);
+        let m = &s.models[0];
+        assert!((m.initial_hip_height_m - 0.95).abs() < 1e-6, "hips start at 0.95 m: {m:?}");
+        assert!(m.min_hip_height_m > 0.98 * m.initial_hip_height_m, "{m:?}");
+        assert!(m.max_abs_hip_pitch_rad < 0.02 && m.only_feet_touched, "{m:?}");
     }
 }
