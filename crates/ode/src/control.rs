@@ -33,6 +33,8 @@ pub enum IntegrationError {
     NonFinite { step: usize, time: f64, coordinate: usize },
     #[error(transparent)]
     Ode(#[from] OdeError),
+    #[error("the step controller reached its smallest step {dt} s at t = {time} s with the error still above tolerance")]
+    StepTooSmall { time: f64, dt: f64 },
 }
 
 /// Integrates `state` from `t0` to `t_end`. `scratch` is the second buffer of the double-buffered state
@@ -89,7 +91,12 @@ pub fn integrate<S: OdeSystem + ?Sized>(
                     continue;
                 };
                 let proposed = next_step(stepper.integrator(), h_try, err, tolerance);
-                if err <= tolerance || h_try <= dt_min {
+                if err > tolerance && h_try <= dt_min {
+                    // Accepting here would march on at the smallest step with an error the user did
+                    // not allow (typically after a blow-up); stop and say so instead.
+                    return Err(IntegrationError::StepTooSmall { time: t, dt: h_try });
+                }
+                if err <= tolerance {
                     std::mem::swap(state, scratch);
                     t += h_try;
                     accept(&mut stats, h_try, t, state)?;

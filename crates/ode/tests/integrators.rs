@@ -194,3 +194,13 @@ fn step_warning_fires_beyond_the_stability_limit_only() {
     assert!(w.contains("exceeds the stable step"), "{w}");
     assert!(check_step(Integrator::ImplicitEuler, 100.0, 1.0).is_none());
 }
+
+#[test]
+fn controller_stops_when_the_smallest_step_cannot_meet_the_tolerance() {
+    let mut st = Stepper::new(Integrator::DormandPrince, 1);
+    let mut now = State::new(vec![4.0], vec![0.0]);
+    let mut scratch = State::zeros(1);
+    let control = StepControl::Adaptive { tolerance: 1e-14, dt_initial: 0.5, dt_min: 0.1, dt_max: 1.0 };
+    let err = integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap_err();
+    assert!(matches!(err, anima_ode::IntegrationError::StepTooSmall { dt, .. } if dt == 0.1), "{err}");
+}
