@@ -33,7 +33,9 @@ pub enum IntegrationError {
     NonFinite { step: usize, time: f64, coordinate: usize },
     #[error(transparent)]
     Ode(#[from] OdeError),
-    #[error("the step controller reached its smallest step {dt} s at t = {time} s with the error still above tolerance")]
+    #[error(
+        "the step controller reached its smallest step {dt} s at t = {time} s with the error still above tolerance"
+    )]
     StepTooSmall { time: f64, dt: f64 },
 }
 

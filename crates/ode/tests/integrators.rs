@@ -201,6 +201,7 @@ fn controller_stops_when_the_smallest_step_cannot_meet_the_tolerance() {
     let mut now = State::new(vec![4.0], vec![0.0]);
     let mut scratch = State::zeros(1);
     let control = StepControl::Adaptive { tolerance: 1e-14, dt_initial: 0.5, dt_min: 0.1, dt_max: 1.0 };
-    let err = integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap_err();
+    let err =
+        integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap_err();
     assert!(matches!(err, anima_ode::IntegrationError::StepTooSmall { dt, .. } if dt == 0.1), "{err}");
 }
