@@ -145,6 +145,12 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
     let reference = reference(scene)?;
     let mut curves = Vec::new();
     for integrator in Integrator::ALL {
+        // The thesis's adaptive Euler sizes its step by the largest acceleration, which on the 64 × 64
+        // sheet means hundreds of thousands of tiny steps per run; it is measured on the N = 32 sheet.
+        if integrator == Integrator::AdaptiveEuler && scene.spec.n > 32 {
+            curves.push(Curve { integrator, points: vec![], largest_stable: None, at_largest: None });
+            continue;
+        }
         eprintln!("xtask: {} — {integrator}", scene.name);
         let knobs: Vec<(f64, StepControl)> = match integrator {
             Integrator::DormandPrince => [1e-3, 1e-4, 1e-5, 1e-6]
@@ -552,7 +558,7 @@ fn stability_map() -> Result<String> {
     type Points = Vec<(f64, f64)>;
     let mut series: Vec<(Integrator, Points, Points)> =
         methods.iter().map(|&m| (m, vec![], vec![])).collect();
-    for k in [100.0, 1000.0, 1e4, 1e5] {
+    for k in [100.0, 1000.0, 1e4] {
         let spec =
             SheetSpec { n: 16, damping: 0.0, stiffness: [k, k / 2.0, 10.0], ..SheetSpec::standard(16) };
         let mut net = spec.build();
