@@ -152,42 +152,21 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
             continue;
         }
         eprintln!("xtask: {} — {integrator}", scene.name);
-        let knobs: Vec<(f64, StepControl)> = match integrator {
-            Integrator::DormandPrince => [1e-3, 1e-4, 1e-5, 1e-6]
-                .iter()
-                .map(|&tol| {
-                    (
-                        tol,
-                        StepControl::Adaptive {
-                            tolerance: tol,
-                            dt_initial: 1e-4,
-                            dt_min: 1e-7,
-                            dt_max: 0.01,
-                        },
-                    )
-                })
-                .collect(),
+        let adaptive = |tols: &[f64]| -> Vec<(f64, StepControl)> {
+            let control =
+                |tol| StepControl::Adaptive { tolerance: tol, dt_initial: 1e-4, dt_min: 1e-7, dt_max: 0.01 };
+            tols.iter().map(|&tol| (tol, control(tol))).collect()
+        };
+        let constant = |dts: &[f64]| -> Vec<(f64, StepControl)> {
+            dts.iter().map(|&dt| (dt, StepControl::Constant { dt })).collect()
+        };
+        let knobs = match integrator {
+            Integrator::DormandPrince => adaptive(&[1e-3, 1e-4, 1e-5, 1e-6]),
             // The thesis's rule takes h ∝ √tol against the largest acceleration: tight tolerances cost
             // hundreds of thousands of steps on a stiff sheet, so the sweep stops at 10⁻⁴.
-            Integrator::AdaptiveEuler => [1e-2, 1e-3, 1e-4]
-                .iter()
-                .map(|&tol| {
-                    (
-                        tol,
-                        StepControl::Adaptive {
-                            tolerance: tol,
-                            dt_initial: 1e-4,
-                            dt_min: 1e-7,
-                            dt_max: 0.01,
-                        },
-                    )
-                })
-                .collect(),
-            Integrator::ImplicitEuler => [1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1e-3]
-                .iter()
-                .map(|&dt| (dt, StepControl::Constant { dt }))
-                .collect(),
-            _ => [5e-4, 2e-4, 1e-4, 5e-5].iter().map(|&dt| (dt, StepControl::Constant { dt })).collect(),
+            Integrator::AdaptiveEuler => adaptive(&[1e-2, 1e-3, 1e-4]),
+            Integrator::ImplicitEuler => constant(&[1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1e-3]),
+            _ => constant(&[5e-4, 2e-4, 1e-4, 5e-5]),
         };
         let mut points = Vec::new();
         for (knob, control) in knobs {

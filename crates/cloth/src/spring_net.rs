@@ -354,6 +354,18 @@ fn for_each_chunk<T: Send>(
     }
 }
 
+/// ∂f_i/∂x_j of a Hooke spring along unit n with length l: k [n nᵀ + (1 − L0/l)(I − n nᵀ)], the
+/// geometric term clamped at zero when `definite` (so that the implicit system stays positive definite
+/// under compression). Shared by every spring model that gives Jacobians.
+pub fn spring_stiffness_block(n: DVec3, l: f64, k: f64, rest_length: f64, definite: bool) -> DMat3 {
+    let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+    let mut geometric = 1.0 - rest_length / l;
+    if definite {
+        geometric = geometric.max(0.0);
+    }
+    nn * k + (DMat3::IDENTITY - nn) * (k * geometric)
+}
+
 /// Exact Jacobians of the damped springs (Baraff & Witkin 1998):
 /// ∂f_i/∂x_j = k [n nᵀ + (1 − L0/L)(I − n nᵀ)] (the geometric term clamped at 0 when `definite_jacobians`),
 /// ∂f_i/∂v_j = c n nᵀ, and ∂f_i/∂x_i, ∂f_i/∂v_i their negatives. The damping force's dependence on n
@@ -391,13 +403,8 @@ impl Linearized<DVec3> for SpringNetwork {
                 continue;
             }
             let n = d / l;
-            let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
-            let mut geometric = 1.0 - s.rest_length / l;
-            if self.definite_jacobians {
-                geometric = geometric.max(0.0);
-            }
-            let ks = nn * s.stiffness + (DMat3::IDENTITY - nn) * (s.stiffness * geometric);
-            let ds = nn * s.damping;
+            let ks = spring_stiffness_block(n, l, s.stiffness, s.rest_length, self.definite_jacobians);
+            let ds = DMat3::from_cols(n * n.x, n * n.y, n * n.z) * s.damping;
             jac.k_diag[i] -= ks;
             jac.k_diag[j] -= ks;
             jac.d_diag[i] -= ds;

@@ -174,9 +174,7 @@ impl anima_ode::Linearized<DVec3> for Model {
             if l == 0.0 {
                 continue;
             }
-            let n = d / l;
-            let nn = glam::DMat3::from_cols(n * n.x, n * n.y, n * n.z);
-            let ks = nn * k + (glam::DMat3::IDENTITY - nn) * (k * (1.0 - l0 / l).max(0.0));
+            let ks = crate::spring_net::spring_stiffness_block(d / l, l, k, l0, true);
             jac.k_diag[i] -= ks;
             jac.k_diag[j] -= ks;
             jac.k_off[e] += ks;
