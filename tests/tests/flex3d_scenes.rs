@@ -87,6 +87,7 @@ fn run_writes_frames_pictures_and_summary() {
         pictures: true,
         progress: false,
         warn_stability: false,
+        linear_solver: None,
     };
     let outcome = run(&loaded, &opts, |_, _| {}).unwrap();
     let s = &outcome.summary;

@@ -11,7 +11,7 @@ use anima_cloth::network_sim::NetworkSim;
 use anima_cloth::spring_net::SheetSpec;
 use anima_geom::DVec3;
 use anima_ode::stability::{max_frequency, stability_limit};
-use anima_ode::{Integrator, State, StepControl, Stepper, integrate};
+use anima_ode::{Integrator, LinearSolver, State, StepControl, Stepper, integrate};
 use anima_viz::{LinePlot, Series, SeriesStyle};
 use anyhow::{Context, Result};
 
@@ -25,14 +25,29 @@ struct Point {
     com_error: f64,
 }
 
-/// One integrator on one scene.
+/// One integrator (with its linear solver, for the implicit ones) on one scene.
 #[derive(Debug, Clone)]
 struct Curve {
     integrator: Integrator,
+    solver: Option<LinearSolver>,
     points: Vec<Point>,
     largest_stable: Option<f64>,
     /// The run at the largest stable step.
     at_largest: Option<Point>,
+}
+
+impl Curve {
+    fn new(integrator: Integrator) -> Self {
+        Self { integrator, solver: None, points: vec![], largest_stable: None, at_largest: None }
+    }
+
+    /// The integrator's name, with `+cholesky` when an implicit method solves directly.
+    fn label(&self) -> String {
+        match self.solver {
+            Some(s @ LinearSolver::SparseCholesky) => format!("{}+{}", self.integrator, s.name()),
+            _ => self.integrator.to_string(),
+        }
+    }
 }
 
 fn cache_dir() -> PathBuf {
@@ -52,7 +67,12 @@ struct SheetScene {
 }
 
 /// Runs a sheet; returns final positions and wall time, or None if it went non-finite or wild.
-fn run_sheet(scene: &SheetScene, integrator: Integrator, control: StepControl) -> Option<(Vec<DVec3>, f64)> {
+fn run_sheet(
+    scene: &SheetScene,
+    integrator: Integrator,
+    solver: Option<LinearSolver>,
+    control: StepControl,
+) -> Option<(Vec<DVec3>, f64)> {
     let net = scene.spec.build();
     let n = net.n_particles();
     let dt = match control {
@@ -60,6 +80,9 @@ fn run_sheet(scene: &SheetScene, integrator: Integrator, control: StepControl) -
         StepControl::Adaptive { dt_initial, .. } => dt_initial,
     };
     let mut sim = NetworkSim::new(net, scene.spec.positions(), integrator, dt);
+    if let Some(s) = solver {
+        sim.stepper_mut().set_linear_solver(s);
+    }
     let start = Instant::now();
     let ok = match control {
         StepControl::Constant { dt } => {
@@ -107,7 +130,7 @@ fn reference(scene: &SheetScene) -> Result<Vec<DVec3>> {
         }
     }
     eprintln!("xtask: computing the reference for {} (RK4, 1e-5 s) …", scene.name);
-    let (x, secs) = run_sheet(scene, Integrator::Rk4, StepControl::Constant { dt: 1e-5 })
+    let (x, secs) = run_sheet(scene, Integrator::Rk4, None, StepControl::Constant { dt: 1e-5 })
         .context("reference diverged")?;
     eprintln!("xtask: reference took {secs:.1} s");
     std::fs::create_dir_all(cache_dir())?;
@@ -129,7 +152,7 @@ fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
 /// Largest constant step (log bisection between 10⁻⁶ and 0.1 s) at which the sheet stays finite and slow
 /// for its whole duration.
 fn largest_stable_step(scene: &SheetScene, integrator: Integrator) -> f64 {
-    let stable = |dt: f64| run_sheet(scene, integrator, StepControl::Constant { dt }).is_some();
+    let stable = |dt: f64| run_sheet(scene, integrator, None, StepControl::Constant { dt }).is_some();
     let (mut lo, mut hi) = (1e-6f64, 0.1f64);
     if stable(hi) {
         return hi;
@@ -144,14 +167,24 @@ fn largest_stable_step(scene: &SheetScene, integrator: Integrator) -> f64 {
 fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec3>)> {
     let reference = reference(scene)?;
     let mut curves = Vec::new();
-    for integrator in Integrator::ALL {
+    // Each implicit method twice: with conjugate gradients and with the sparse Cholesky solve.
+    let variants = Integrator::ALL.into_iter().flat_map(|i| {
+        let solvers = if i.is_implicit() {
+            vec![Some(LinearSolver::default_cg()), Some(LinearSolver::SparseCholesky)]
+        } else {
+            vec![None]
+        };
+        solvers.into_iter().map(move |s| (i, s))
+    });
+    for (integrator, solver) in variants {
         // The thesis's adaptive Euler sizes its step by the largest acceleration, which on the 64 × 64
         // sheet means hundreds of thousands of tiny steps per run; it is measured on the N = 32 sheet.
         if integrator == Integrator::AdaptiveEuler && scene.spec.n > 32 {
-            curves.push(Curve { integrator, points: vec![], largest_stable: None, at_largest: None });
+            curves.push(Curve::new(integrator));
             continue;
         }
-        eprintln!("xtask: {} — {integrator}", scene.name);
+        let mut curve = Curve { solver, ..Curve::new(integrator) };
+        eprintln!("xtask: {} — {}", scene.name, curve.label());
         let adaptive = |tols: &[f64]| -> Vec<(f64, StepControl)> {
             let control =
                 |tol| StepControl::Adaptive { tolerance: tol, dt_initial: 1e-4, dt_min: 1e-7, dt_max: 0.01 };
@@ -165,7 +198,9 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
             // The thesis's rule takes h ∝ √tol against the largest acceleration: tight tolerances cost
             // hundreds of thousands of steps on a stiff sheet, so the sweep stops at 10⁻⁴.
             Integrator::AdaptiveEuler => adaptive(&[1e-2, 1e-3, 1e-4]),
-            Integrator::ImplicitEuler => constant(&[1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1e-3]),
+            Integrator::ImplicitEuler | Integrator::Bdf2 => {
+                constant(&[1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1e-3, 5e-4])
+            }
             _ => constant(&[5e-4, 2e-4, 1e-4, 5e-5]),
         };
         let mut points = Vec::new();
@@ -173,17 +208,18 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
             if quick && knob < 5e-5 {
                 continue;
             }
-            if let Some((x, seconds)) = run_sheet(scene, integrator, control) {
+            if let Some((x, seconds)) = run_sheet(scene, integrator, solver, control) {
                 points.push(measure(scene, knob, seconds, &x, &reference));
             }
         }
-        let largest_stable = (!integrator.is_adaptive() && integrator != Integrator::ImplicitEuler && !quick)
+        curve.points = points;
+        curve.largest_stable = (!integrator.is_adaptive() && !integrator.is_implicit() && !quick)
             .then(|| largest_stable_step(scene, integrator));
-        let at_largest = largest_stable.and_then(|dt| {
-            run_sheet(scene, integrator, StepControl::Constant { dt })
+        curve.at_largest = curve.largest_stable.and_then(|dt| {
+            run_sheet(scene, integrator, None, StepControl::Constant { dt })
                 .map(|(x, secs)| measure(scene, dt, secs, &x, &reference))
         });
-        curves.push(Curve { integrator, points, largest_stable, at_largest });
+        curves.push(curve);
     }
     Ok((curves, reference))
 }
@@ -261,7 +297,7 @@ fn mass_spring_curves() -> Vec<Curve> {
                     })
                 })
                 .collect();
-            Curve { integrator, points, largest_stable: Some(stability_limit(integrator)), at_largest: None }
+            Curve { points, largest_stable: Some(stability_limit(integrator)), ..Curve::new(integrator) }
         })
         .collect()
 }
@@ -289,7 +325,7 @@ fn plot(title: &str, curves: &[Curve], error_label: &str) -> Result<anima_viz::I
     p.log_y = true;
     for c in curves.iter().filter(|c| !c.points.is_empty()) {
         let pts = c.points.iter().map(|p| (p.seconds, p.error.max(1e-16))).collect();
-        p.series.push(Series::new(c.integrator.name(), pts, SeriesStyle::LineWithMarkers));
+        p.series.push(Series::new(c.label(), pts, SeriesStyle::LineWithMarkers));
     }
     Ok(p.render(900, 600)?)
 }
@@ -313,7 +349,7 @@ fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_labe
             Some(s) => format!("{s:.3e}{stable_unit}"),
             None => "—".to_owned(),
         };
-        let _ = write!(out, "| {} | {stable} |", c.integrator);
+        let _ = write!(out, "| {} | {stable} |", c.label());
         for (level, _) in levels {
             match time_at(c, *level) {
                 Some(t) => {
@@ -328,7 +364,7 @@ fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_labe
     for (level, l) in levels {
         let best = curves
             .iter()
-            .filter_map(|c| time_at(c, *level).map(|t| (t, c.integrator)))
+            .filter_map(|c| time_at(c, *level).map(|t| (t, c.label())))
             .min_by(|a, b| a.0.total_cmp(&b.0));
         match best {
             Some((t, i)) => {
@@ -342,7 +378,7 @@ fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_labe
     out.push('\n');
 }
 
-pub fn run(quick: bool) -> Result<()> {
+pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
     let mut doc = String::new();
     let machine = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -361,19 +397,7 @@ pub fn run(quick: bool) -> Result<()> {
         today()
     );
 
-    // (a) Table 4.1 spring.
-    eprintln!("xtask: mass–spring …");
-    let curves = mass_spring_curves();
-    save(
-        "bench-mass-spring.png",
-        &plot("Table 4.1 spring: error against wall time", &curves, "max |x − (2 + 2 cos t)|, t ≤ 10")?,
-    )?;
-    doc.push_str("## (a) The Table 4.1 spring against 2 + 2 cos t\n\nError: largest |x(t) − 2 − 2 cos t| over t ∈ [0, 10]. \
-                  Stability: the measured interval h·ω on the imaginary axis (ω = 1 here), from `anima_ode::stability`.\n\n");
-    table(&mut doc, &curves, &[(1e-2, "error 10⁻²"), (1e-4, "error 10⁻⁴")], "stable h·ω", "");
-    doc.push_str("![mass-spring](figures/bench-mass-spring.png)\n\n");
-
-    // (b), (c) sheets.
+    // The sheets of (b) and (c).
     let scenes = [
         SheetScene {
             name: "standard-32",
@@ -397,6 +421,35 @@ pub fn run(quick: bool) -> Result<()> {
             com_reference: None,
         },
     ];
+    if let Some(name) = only {
+        let scene = scenes.iter().find(|s| s.name == name).with_context(|| {
+            format!("no sheet scene `{name}`; expected standard-32, standard-64 or oliveira-32")
+        })?;
+        let (curves, _) = sheet_curves(scene, quick)?;
+        let mut out = String::new();
+        table(
+            &mut out,
+            &curves,
+            &[(1e-2, "1 % (10 mm)"), (1e-3, "0.1 % (1 mm)")],
+            "largest stable step",
+            " s",
+        );
+        println!("{out}");
+        return Ok(());
+    }
+
+    // (a) Table 4.1 spring.
+    eprintln!("xtask: mass–spring …");
+    let curves = mass_spring_curves();
+    save(
+        "bench-mass-spring.png",
+        &plot("Table 4.1 spring: error against wall time", &curves, "max |x − (2 + 2 cos t)|, t ≤ 10")?,
+    )?;
+    doc.push_str("## (a) The Table 4.1 spring against 2 + 2 cos t\n\nError: largest |x(t) − 2 − 2 cos t| over t ∈ [0, 10]. \
+                  Stability: the measured interval h·ω on the imaginary axis (ω = 1 here), from `anima_ode::stability`.\n\n");
+    table(&mut doc, &curves, &[(1e-2, "error 10⁻²"), (1e-4, "error 10⁻⁴")], "stable h·ω", "");
+    doc.push_str("![mass-spring](figures/bench-mass-spring.png)\n\n");
+
     let mut peers = String::new();
     for scene in &scenes {
         let (curves, _) = sheet_curves(scene, quick)?;
@@ -466,7 +519,7 @@ fn peer_table(scene: &SheetScene, curves: &[Curve]) -> String {
         if let Some(p) = c.at_largest {
             rows.push(("largest stable", p));
         }
-        if c.integrator == Integrator::ImplicitEuler {
+        if c.integrator.is_implicit() {
             for p in c.points.iter().filter(|p| p.knob > 1e-3) {
                 rows.push(("large", *p));
             }
@@ -480,7 +533,7 @@ fn peer_table(scene: &SheetScene, curves: &[Curve]) -> String {
             let _ = writeln!(
                 out,
                 "| {} | {:.2e} ({what}) | {:.3} s | {:.2}× faster | {:.2} mm | {:.2} mm |",
-                c.integrator,
+                c.label(),
                 p.knob,
                 p.seconds,
                 fastest / p.seconds,
@@ -489,7 +542,7 @@ fn peer_table(scene: &SheetScene, curves: &[Curve]) -> String {
             );
         }
         if !c.points.iter().any(|p| (p.knob - common).abs() < 1e-12) && !c.integrator.is_adaptive() {
-            let _ = writeln!(out, "| {} | {common:.0e} (common) | unstable | — | — | — |", c.integrator);
+            let _ = writeln!(out, "| {} | {common:.0e} (common) | unstable | — | — | — |", c.label());
         }
     }
     out.push('\n');

@@ -37,6 +37,10 @@ enum Command {
     Bench {
         #[arg(long)]
         quick: bool,
+        /// Measure one sheet scene only (standard-32, standard-64, oliveira-32) and print its table
+        /// instead of rewriting docs/benchmarks.md.
+        #[arg(long)]
+        only: Option<String>,
     },
 }
 
@@ -49,6 +53,6 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Reproduce { experiment, friction } => reproduce::run(&experiment, &friction),
         Command::Figures => figures::run(),
-        Command::Bench { quick } => bench::run(quick),
+        Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
     }
 }

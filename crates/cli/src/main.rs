@@ -46,9 +46,14 @@ struct RunArgs {
     /// Output folder for frames, pictures and the summary.
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Integrator: forward-euler (the thesis's), symplectic-euler or rk4.
+    /// Integrator: forward-euler (FLEX3D's), symplectic-euler, midpoint, rk4, dopri5, ab4, abm4,
+    /// adaptive-euler, implicit-euler or bdf2.
     #[arg(long)]
     integrator: Option<Integrator>,
+    /// Linear solver of implicit-euler and bdf2: cg (conjugate gradients, the default) or cholesky
+    /// (faer's sparse Cholesky; exact whatever the stiffness).
+    #[arg(long)]
+    linear_solver: Option<anima_ode::LinearSolver>,
     /// Time step in seconds (overrides DELTA_t).
     #[arg(long)]
     dt: Option<f64>,
@@ -170,6 +175,7 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
         pictures: !args.no_pictures,
         progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         warn_stability: !args.quiet,
+        linear_solver: args.linear_solver,
     };
     if !args.quiet {
         eprintln!(
@@ -284,6 +290,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         pictures: !args.no_pictures,
         progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         warn_stability: !args.quiet,
+        linear_solver: args.linear_solver,
     };
     let n_frames = loaded.scene.n_frames();
     if !args.quiet {

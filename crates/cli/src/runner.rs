@@ -27,6 +27,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// Warn on standard error when the step is beyond the integrator's stability limit.
     pub warn_stability: bool,
+    /// The linear solver of the implicit integrators (`None`: conjugate gradients).
+    pub linear_solver: Option<anima_ode::LinearSolver>,
 }
 
 impl RunOptions {
@@ -39,6 +41,7 @@ impl RunOptions {
             pictures: false,
             progress: false,
             warn_stability: false,
+            linear_solver: None,
         }
     }
 }
@@ -129,6 +132,9 @@ pub fn run(
     let scene = &loaded.scene;
     let objects = loaded.objects.iter().map(|(_, m)| m.clone()).collect();
     let mut world = Flex3dWorld::new(scene, objects).context("building the scene")?;
+    if let Some(solver) = opts.linear_solver {
+        world.stepper_mut().set_linear_solver(solver);
+    }
     if opts.progress || opts.warn_stability {
         let omega = world.max_frequency();
         if let Some(w) = anima_ode::stability::check_step(scene.integrator, scene.dt_s, omega) {

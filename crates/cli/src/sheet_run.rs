@@ -25,6 +25,8 @@ pub struct SheetRunOptions {
     pub progress: bool,
     /// Warn when the step is beyond the integrator's stability limit.
     pub warn_stability: bool,
+    /// The linear solver of the implicit integrators (`None`: conjugate gradients).
+    pub linear_solver: Option<anima_ode::LinearSolver>,
 }
 
 /// The JSON summary of a sheet run.
@@ -96,6 +98,9 @@ pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Res
     let n = net.n_particles();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
+    if let Some(solver) = opts.linear_solver {
+        sim.stepper_mut().set_linear_solver(solver);
+    }
     if opts.warn_stability {
         let pinned = sim.network.pinned().to_vec();
         let v = vec![DVec3::ZERO; n];

@@ -39,10 +39,33 @@ pub trait Coord:
     fn block_row_abs_sums(b: Self::Block) -> Self;
     /// Sum of absolute entries of each column (the row sums of the transpose).
     fn block_col_abs_sums(b: Self::Block) -> Self;
+
+    /// Number of scalar components (1 or 3): the size of a block, for assembling scalar sparse matrices.
+    const DIM: usize;
+    /// Component `k` (< DIM).
+    fn component(self, k: usize) -> f64;
+    /// Sets component `k` (< DIM).
+    fn set_component(&mut self, k: usize, value: f64);
+    /// Entry (row `r`, column `c`) of a block.
+    fn block_entry(b: Self::Block, r: usize, c: usize) -> f64;
 }
 
 impl Coord for f64 {
     type Block = f64;
+    const DIM: usize = 1;
+
+    #[inline]
+    fn component(self, _k: usize) -> f64 {
+        self
+    }
+    #[inline]
+    fn set_component(&mut self, _k: usize, value: f64) {
+        *self = value;
+    }
+    #[inline]
+    fn block_entry(b: f64, _r: usize, _c: usize) -> f64 {
+        b
+    }
 
     #[inline]
     fn is_finite(self) -> bool {
@@ -92,6 +115,20 @@ impl Coord for f64 {
 
 impl Coord for DVec3 {
     type Block = DMat3;
+    const DIM: usize = 3;
+
+    #[inline]
+    fn component(self, k: usize) -> f64 {
+        self[k]
+    }
+    #[inline]
+    fn set_component(&mut self, k: usize, value: f64) {
+        self[k] = value;
+    }
+    #[inline]
+    fn block_entry(b: DMat3, r: usize, c: usize) -> f64 {
+        b.col(c)[r]
+    }
 
     #[inline]
     fn is_finite(self) -> bool {

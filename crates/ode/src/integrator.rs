@@ -31,10 +31,15 @@ pub enum Integrator {
     /// Backward Euler, linearised once per step (Baraff & Witkin 1998):
     /// (M − h D − h² K) Δv = h (f + h K v), x_{n+1} = x_n + h (v_n + Δv).
     ImplicitEuler,
+    /// The second-order backward differentiation formula, linearised once per step like implicit Euler:
+    /// y_{n+1} − 4/3 y_n + 1/3 y_{n−1} = 2/3 h f(y_{n+1}). A-stable like backward Euler but with far less
+    /// numerical damping; started (and restarted after a discontinuity or a change of step) by one
+    /// implicit Euler step.
+    Bdf2,
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 9] = [
+    pub const ALL: [Integrator; 10] = [
         Integrator::ForwardEuler,
         Integrator::SymplecticEuler,
         Integrator::Midpoint,
@@ -44,6 +49,7 @@ impl Integrator {
         Integrator::AdamsBashforthMoulton4,
         Integrator::AdaptiveEuler,
         Integrator::ImplicitEuler,
+        Integrator::Bdf2,
     ];
 
     /// The name used on the command line.
@@ -58,6 +64,7 @@ impl Integrator {
             Integrator::AdamsBashforthMoulton4 => "abm4",
             Integrator::AdaptiveEuler => "adaptive-euler",
             Integrator::ImplicitEuler => "implicit-euler",
+            Integrator::Bdf2 => "bdf2",
         }
     }
 
@@ -68,7 +75,7 @@ impl Integrator {
             Integrator::Midpoint | Integrator::AdamsBashforthMoulton4 | Integrator::AdaptiveEuler => 2,
             Integrator::Rk4 => 4,
             Integrator::DormandPrince => 7,
-            Integrator::ImplicitEuler => 1,
+            Integrator::ImplicitEuler | Integrator::Bdf2 => 1,
         }
     }
 
@@ -79,7 +86,7 @@ impl Integrator {
             | Integrator::SymplecticEuler
             | Integrator::AdaptiveEuler
             | Integrator::ImplicitEuler => 1,
-            Integrator::Midpoint => 2,
+            Integrator::Midpoint | Integrator::Bdf2 => 2,
             Integrator::Rk4 | Integrator::AdamsBashforth4 | Integrator::AdamsBashforthMoulton4 => 4,
             Integrator::DormandPrince => 5,
         }
@@ -92,7 +99,12 @@ impl Integrator {
 
     /// Whether the method needs the system's Jacobians ([`crate::OdeSystem::linearized`]).
     pub fn needs_jacobians(self) -> bool {
-        self == Integrator::ImplicitEuler
+        self.is_implicit()
+    }
+
+    /// Whether the method is implicit (A-stable: no step-size limit from stiffness).
+    pub fn is_implicit(self) -> bool {
+        matches!(self, Integrator::ImplicitEuler | Integrator::Bdf2)
     }
 
     /// Whether the method keeps a history of earlier steps that a discontinuity (a collision response, a
@@ -136,6 +148,7 @@ impl FromStr for Integrator {
             "abm4" | "predictor-corrector" | "adams-bashforth-moulton" => Integrator::AdamsBashforthMoulton4,
             "adaptive-euler" => Integrator::AdaptiveEuler,
             "implicit-euler" | "backward-euler" | "implicit" => Integrator::ImplicitEuler,
+            "bdf2" | "bdf-2" => Integrator::Bdf2,
             _ => return Err(ParseIntegratorError(s.to_owned())),
         })
     }

@@ -10,7 +10,8 @@
 //!   allocates): explicit and symplectic Euler, midpoint (RK2), classical RK4, Dormand–Prince 5(4),
 //!   Adams–Bashforth 4 and the Adams–Bashforth–Moulton 4 predictor–corrector (both started by RK4), the
 //!   thesis's adaptive Euler, and implicit (backward) Euler solved the Baraff–Witkin way (one Newton step,
-//!   exact Jacobians from a [`Linearized`] system, preconditioned conjugate gradients).
+//!   exact Jacobians from a [`Linearized`] system, preconditioned conjugate gradients or faer's sparse
+//!   Cholesky with its symbolic factorisation reused).
 //! - [`integrate`] drives a stepper with a [`StepControl`] (constant step, an embedded-error controller,
 //!   or the thesis's Euler rule) and stops with the step and coordinate where a value went non-finite.
 //! - [`stability`] estimates the largest frequency of a system and the largest stable step of each
@@ -24,6 +25,8 @@ mod control;
 mod coord;
 mod implicit;
 mod integrator;
+#[cfg(feature = "sparse-cholesky")]
+mod sparse;
 pub mod stability;
 mod stepper;
 

@@ -84,7 +84,7 @@ pub fn gershgorin_frequency<C: Coord>(lin: &mut dyn Linearized<C>, t: f64, x: &[
 /// step (0); midpoint and the predictor–corrector grow so slowly at small steps that their limits are
 /// small but not zero. Damping (friction) is what makes the growing methods usable.
 pub fn stability_limit(integrator: Integrator) -> f64 {
-    if integrator == Integrator::ImplicitEuler {
+    if integrator.is_implicit() {
         return f64::INFINITY;
     }
     let stable = |hw: f64| -> bool {

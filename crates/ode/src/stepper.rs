@@ -61,6 +61,8 @@ pub enum OdeError {
         "the linear solve of an implicit step did not converge ({iterations} iterations, residual {residual:e})"
     )]
     SolverDidNotConverge { iterations: usize, residual: f64 },
+    #[error("the direct solve of an implicit step failed: {0}")]
+    Factorization(String),
 }
 
 /// Butcher tableau of an explicit Runge–Kutta method; `e` holds b − b̂ for an embedded error estimate.
@@ -154,7 +156,9 @@ impl<C: Coord> Stepper<C> {
                 len: 0,
                 h: 0.0,
             }),
-            implicit: (integrator == Integrator::ImplicitEuler).then(|| ImplicitWorkspace::new(n)),
+            implicit: integrator
+                .is_implicit()
+                .then(|| ImplicitWorkspace::new(n, integrator == Integrator::Bdf2)),
         }
     }
 
@@ -168,11 +172,23 @@ impl<C: Coord> Stepper<C> {
         }
     }
 
+    /// Newton iterations per step of the implicit methods (at least 1). Backward Euler defaults to 1,
+    /// Baraff and Witkin's single linearisation; BDF2 to 2. More iterations solve the nonlinear step
+    /// equations more closely, which BDF2 needs to keep its second order on stiff, damped springs.
+    pub fn set_newton_iterations(&mut self, iterations: usize) {
+        if let Some(ws) = &mut self.implicit {
+            ws.newton_iterations = iterations.max(1);
+        }
+    }
+
     /// Forgets the history of a multistep method, so that the next steps start it again with RK4. Call
     /// after anything changed the state outside the integrator (a collision response, a constraint).
     pub fn reset_history(&mut self) {
         if let Some(h) = &mut self.history {
             h.len = 0;
+        }
+        if let Some(ws) = &mut self.implicit {
+            ws.reset_history();
         }
     }
 
@@ -220,9 +236,9 @@ impl<C: Coord> Stepper<C> {
                 self.multistep(sys, t, h, now, next)
             }
             Integrator::AdaptiveEuler => self.adaptive_euler(sys, t, h, now, next),
-            Integrator::ImplicitEuler => {
-                let ws = self.implicit.as_mut().expect("allocated for implicit Euler");
-                let lin = sys.linearized().ok_or(OdeError::NoJacobians(Integrator::ImplicitEuler))?;
+            Integrator::ImplicitEuler | Integrator::Bdf2 => {
+                let ws = self.implicit.as_mut().expect("allocated for the implicit methods");
+                let lin = sys.linearized().ok_or(OdeError::NoJacobians(self.integrator))?;
                 ws.step(lin, t, h, now, next)?
             }
         })

@@ -2,9 +2,34 @@
 //! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t).
 
 use anima_ode::stability::stability_limit;
-use anima_ode::{Integrator, OdeSystem, State, StepControl, Stepper, integrate};
+use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, StepControl, Stepper, integrate};
 
 struct Spring;
+
+/// The spring is linear, so one Newton step solves the implicit methods' equations exactly and their
+/// observed orders are the methods' own.
+impl Linearized<f64> for Spring {
+    fn masses(&self) -> &[f64] {
+        &[1.0]
+    }
+    fn prescribed(&self) -> &[bool] {
+        &[false]
+    }
+    fn pattern(&self) -> &[(u32, u32)] {
+        &[]
+    }
+    fn force_and_jacobians(
+        &mut self,
+        _t: f64,
+        x: &[f64],
+        _v: &[f64],
+        f: &mut [f64],
+        jac: &mut Jacobians<f64>,
+    ) {
+        f[0] = -(x[0] - 2.0);
+        jac.k_diag[0] = -1.0;
+    }
+}
 
 impl OdeSystem for Spring {
     type Coord = f64;
@@ -13,6 +38,9 @@ impl OdeSystem for Spring {
     }
     fn acceleration(&mut self, _t: f64, x: &[f64], _v: &[f64], a: &mut [f64]) {
         a[0] = -(x[0] - 2.0);
+    }
+    fn linearized(&mut self) -> Option<&mut dyn Linearized<f64>> {
+        Some(self)
     }
 }
 
@@ -51,6 +79,8 @@ fn convergence_orders_from_three_step_sizes() {
         (Integrator::AdamsBashforth4, 0.02, 4.0),
         (Integrator::AdamsBashforthMoulton4, 0.02, 4.0),
         (Integrator::DormandPrince, 0.1, 5.0),
+        (Integrator::ImplicitEuler, 0.01, 1.0),
+        (Integrator::Bdf2, 0.01, 2.0),
     ] {
         let observed = observed_orders(integrator, h);
         for p in observed {
@@ -179,11 +209,51 @@ fn non_finite_state_is_reported_with_its_step() {
 }
 
 #[test]
-fn implicit_euler_refuses_a_system_without_jacobians() {
-    let mut st = Stepper::new(Integrator::ImplicitEuler, 1);
-    let now = State::new(vec![4.0], vec![0.0]);
-    let mut next = State::zeros(1);
-    assert!(st.step(&mut Spring, 0.0, 0.1, &now, &mut next).is_err());
+fn implicit_methods_refuse_a_system_without_jacobians() {
+    struct Plain;
+    impl OdeSystem for Plain {
+        type Coord = f64;
+        fn n_coords(&self) -> usize {
+            1
+        }
+        fn acceleration(&mut self, _t: f64, x: &[f64], _v: &[f64], a: &mut [f64]) {
+            a[0] = -x[0];
+        }
+    }
+    for integrator in [Integrator::ImplicitEuler, Integrator::Bdf2] {
+        let mut st = Stepper::new(integrator, 1);
+        let now = State::new(vec![4.0], vec![0.0]);
+        let mut next = State::zeros(1);
+        assert!(st.step(&mut Plain, 0.0, 0.1, &now, &mut next).is_err());
+    }
+}
+
+/// BDF2 damps an undamped oscillator far less than backward Euler at the same step: after 10 periods at
+/// 20 steps per period, backward Euler has lost most of the amplitude, BDF2 little.
+#[test]
+fn bdf2_damps_less_than_backward_euler() {
+    let amplitude = |integrator| {
+        let t_end = 20.0 * std::f64::consts::PI;
+        let h = 2.0 * std::f64::consts::PI / 20.0;
+        let mut st = Stepper::new(integrator, 1);
+        let mut now = State::new(vec![4.0], vec![0.0]);
+        let mut scratch = State::zeros(1);
+        integrate(
+            &mut Spring,
+            &mut st,
+            StepControl::Constant { dt: h },
+            0.0,
+            t_end,
+            &mut now,
+            &mut scratch,
+            |_, _| {},
+        )
+        .unwrap();
+        (now.x[0] - 2.0).hypot(now.v[0]) / 2.0
+    };
+    let (be, bdf2) = (amplitude(Integrator::ImplicitEuler), amplitude(Integrator::Bdf2));
+    assert!(be < 0.2, "backward Euler kept {be} of the amplitude");
+    assert!(bdf2 > 0.5 && bdf2 < 1.0, "BDF2 kept {bdf2} of the amplitude");
 }
 
 #[test]

@@ -621,6 +621,11 @@ impl Flex3dWorld {
         anima_ode::stability::max_frequency(&mut self.model, t, &self.now.x, &self.now.v, &pinned, 60)
     }
 
+    /// The integrator, to choose its linear solver or reset its history.
+    pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
+        &mut self.stepper
+    }
+
     /// The scene's integrator.
     pub fn integrator(&self) -> anima_ode::Integrator {
         self.stepper.integrator()

@@ -1,0 +1,236 @@
+//! The two linear solvers of implicit Euler — conjugate gradients and faer's sparse Cholesky — solve the
+//! same system; the direct one keeps prescribed coordinates exact and survives an indefinite matrix.
+
+use anima_ode::{Integrator, Jacobians, LinearSolver, Linearized, OdeSystem, State, Stepper};
+use glam::{DMat3, DVec3};
+
+/// A chain of particles joined by linear springs, the first one pinned, under gravity: exact spring
+/// Jacobians (stretched springs, so K is negative semi-definite).
+struct Chain {
+    rest: f64,
+    k: f64,
+    c: f64,
+    masses: Vec<f64>,
+    prescribed: Vec<bool>,
+    pattern: Vec<(u32, u32)>,
+}
+
+impl Chain {
+    fn new(n: usize) -> Self {
+        let masses = (0..n).map(|i| 0.01 * (1.0 + (i % 3) as f64)).collect();
+        let mut prescribed = vec![false; n];
+        prescribed[0] = true;
+        let pattern = (0..n as u32 - 1).map(|i| (i, i + 1)).collect();
+        Self { rest: 0.1, k: 500.0, c: 0.2, masses, prescribed, pattern }
+    }
+}
+
+impl Linearized<DVec3> for Chain {
+    fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+    fn prescribed(&self) -> &[bool] {
+        &self.prescribed
+    }
+    fn pattern(&self) -> &[(u32, u32)] {
+        &self.pattern
+    }
+    fn force_and_jacobians(
+        &mut self,
+        _t: f64,
+        x: &[DVec3],
+        v: &[DVec3],
+        f: &mut [DVec3],
+        jac: &mut Jacobians<DVec3>,
+    ) {
+        for (fi, &m) in f.iter_mut().zip(&self.masses) {
+            *fi = DVec3::new(0.0, -9.81 * m, 0.0);
+        }
+        for (e, &(i, j)) in self.pattern.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
+            let d = x[j] - x[i];
+            let len = d.length();
+            let u = d / len;
+            let force = u * (self.k * (len - self.rest)) + u * (self.c * (v[j] - v[i]).dot(u));
+            f[i] += force;
+            f[j] -= force;
+            let uu = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
+            let geometric = (DMat3::IDENTITY - uu) * (1.0 - self.rest / len).max(0.0);
+            let kb = (uu + geometric) * -self.k;
+            let db = uu * -self.c;
+            jac.k_diag[i] += kb;
+            jac.k_diag[j] += kb;
+            jac.k_off[e] -= kb;
+            jac.d_diag[i] += db;
+            jac.d_diag[j] += db;
+            jac.d_off[e] -= db;
+        }
+    }
+}
+
+impl OdeSystem for Chain {
+    type Coord = DVec3;
+    fn n_coords(&self) -> usize {
+        self.masses.len()
+    }
+    fn acceleration(&mut self, _t: f64, _x: &[DVec3], _v: &[DVec3], _a: &mut [DVec3]) {
+        unreachable!("only implicit Euler steps this system")
+    }
+    fn linearized(&mut self) -> Option<&mut dyn Linearized<DVec3>> {
+        Some(self)
+    }
+}
+
+fn start(n: usize) -> State<DVec3> {
+    let mut s = State::new(vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+    for i in 0..n {
+        let t = i as f64;
+        s.x[i] = DVec3::new(0.12 * t, -0.01 * t * t, 0.02 * (t * 0.7).sin());
+        s.v[i] = DVec3::new(0.0, -0.1 * (t * 0.3).cos(), 0.05);
+    }
+    s.v[0] = DVec3::new(0.3, 0.0, 0.0); // a moving pin
+    s
+}
+
+fn run(solver: LinearSolver, n: usize, steps: usize, h: f64) -> State<DVec3> {
+    let mut chain = Chain::new(n);
+    let mut stepper = Stepper::new(Integrator::ImplicitEuler, n);
+    stepper.set_linear_solver(solver);
+    let mut now = start(n);
+    let mut next = now.clone();
+    for s in 0..steps {
+        stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
+        std::mem::swap(&mut now, &mut next);
+    }
+    now
+}
+
+#[test]
+fn cholesky_and_conjugate_gradients_give_the_same_steps() {
+    let (n, steps, h) = (40, 30, 1.0 / 60.0);
+    let cg = run(LinearSolver::ConjugateGradient { tolerance: 1e-13, max_iterations: 10_000 }, n, steps, h);
+    let direct = run(LinearSolver::SparseCholesky, n, steps, h);
+    let scale = cg.x.iter().map(|p| p.length()).fold(0.0, f64::max);
+    let worst = cg.x.iter().zip(&direct.x).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    assert!(worst <= 1e-9 * scale, "positions differ by {worst:e} (scale {scale})");
+    // The chain did move: the comparison is not between two copies of the start.
+    let moved = start(n).x.iter().zip(&direct.x).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    assert!(moved > 1e-2, "moved only {moved}");
+}
+
+#[test]
+fn cholesky_keeps_a_prescribed_velocity_exactly() {
+    let (n, steps, h) = (10, 20, 1.0 / 30.0);
+    let end = run(LinearSolver::SparseCholesky, n, steps, h);
+    assert_eq!(end.v[0], DVec3::new(0.3, 0.0, 0.0));
+    let x0 = start(n).x[0] + DVec3::new(0.3, 0.0, 0.0) * (h * steps as f64);
+    assert!((end.x[0] - x0).length() < 1e-12);
+}
+
+/// Two scalar coordinates with a destabilising (positive) stiffness: A = M − h²K is symmetric and
+/// indefinite, so LLᵀ must fail and LDLᵀ solve it.
+struct AntiSpring {
+    masses: [f64; 2],
+    prescribed: [bool; 2],
+    pattern: [(u32, u32); 1],
+}
+
+impl Linearized<f64> for AntiSpring {
+    fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+    fn prescribed(&self) -> &[bool] {
+        &self.prescribed
+    }
+    fn pattern(&self) -> &[(u32, u32)] {
+        &self.pattern
+    }
+    fn force_and_jacobians(
+        &mut self,
+        _t: f64,
+        _x: &[f64],
+        _v: &[f64],
+        f: &mut [f64],
+        jac: &mut Jacobians<f64>,
+    ) {
+        f[0] = 1.0;
+        f[1] = -2.0;
+        jac.k_diag[0] = 3.0;
+        jac.k_diag[1] = 0.0;
+        jac.k_off[0] = 0.5;
+    }
+}
+
+impl OdeSystem for AntiSpring {
+    type Coord = f64;
+    fn n_coords(&self) -> usize {
+        2
+    }
+    fn acceleration(&mut self, _t: f64, _x: &[f64], _v: &[f64], _a: &mut [f64]) {
+        unreachable!()
+    }
+    fn linearized(&mut self) -> Option<&mut dyn Linearized<f64>> {
+        Some(self)
+    }
+}
+
+#[test]
+fn an_indefinite_system_falls_back_to_ldlt_and_is_solved_exactly() {
+    let mut sys = AntiSpring { masses: [1.0, 1.0], prescribed: [false; 2], pattern: [(0, 1)] };
+    let mut stepper = Stepper::new(Integrator::ImplicitEuler, 2);
+    stepper.set_linear_solver(LinearSolver::SparseCholesky);
+    let mut now = State::new(vec![0.0; 2], vec![0.0; 2]);
+    now.v = vec![0.5, -1.0];
+    let mut next = now.clone();
+    let h = 1.0;
+    stepper.step(&mut sys, 0.0, h, &now, &mut next).expect("LDLᵀ solves an indefinite system");
+    // A = [[1 − 3, −0.5], [−0.5, 1]], b = h (f + h K v) = [1 + 1.5 − 0.5, −2 + 0.25].
+    let (a, b, d) = (-2.0, -0.5, 1.0);
+    let (r0, r1) = (2.0, -1.75);
+    let det = a * d - b * b;
+    let dv = [(d * r0 - b * r1) / det, (a * r1 - b * r0) / det];
+    for (k, (v1, (v0, d))) in next.v.iter().zip(now.v.iter().zip(dv)).enumerate() {
+        assert!((v1 - (v0 + d)).abs() < 1e-12, "v[{k}] = {v1}");
+    }
+}
+
+#[test]
+fn solver_names_parse() {
+    assert_eq!("cholesky".parse::<LinearSolver>(), Ok(LinearSolver::SparseCholesky));
+    assert_eq!("cg".parse::<LinearSolver>(), Ok(LinearSolver::default_cg()));
+    assert!("lu".parse::<LinearSolver>().unwrap_err().contains("expected `cg` or `cholesky`"));
+    for s in [LinearSolver::SparseCholesky, LinearSolver::default_cg()] {
+        assert_eq!(s.name().parse::<LinearSolver>(), Ok(s));
+    }
+}
+
+/// Residual of the backward Euler equations M (v₁ − v₀) − h f(x₀ + h v₁, v₁) over the free particles.
+fn backward_euler_residual(chain: &mut Chain, now: &State<DVec3>, next: &State<DVec3>, h: f64) -> f64 {
+    let n = now.len();
+    let mut f = vec![DVec3::ZERO; n];
+    let mut jac = Jacobians::new(n, chain.pattern.len());
+    chain.force_and_jacobians(0.0, &next.x, &next.v, &mut f, &mut jac);
+    (1..n).map(|i| ((next.v[i] - now.v[i]) * chain.masses[i] - f[i] * h).length()).fold(0.0, f64::max)
+}
+
+#[test]
+fn newton_iterations_converge_to_the_nonlinear_step() {
+    let (n, h) = (30, 1.0 / 30.0);
+    let residual = |iterations: usize| {
+        let mut chain = Chain::new(n);
+        let mut stepper = Stepper::new(Integrator::ImplicitEuler, n);
+        stepper.set_linear_solver(LinearSolver::SparseCholesky);
+        stepper.set_newton_iterations(iterations);
+        let now = start(n);
+        let mut next = now.clone();
+        stepper.step(&mut chain, 0.0, h, &now, &mut next).expect("step");
+        backward_euler_residual(&mut chain, &now, &next, h)
+    };
+    let r: Vec<f64> = (1..=5).map(residual).collect();
+    // The damping force's dependence on x is left out of K, so convergence is linear, not quadratic:
+    // each iteration must still cut the residual at least tenfold.
+    for w in r.windows(2) {
+        assert!(w[1] < 0.1 * w[0], "residuals after 1..5 Newton iterations: {r:?}");
+    }
+    assert!(r[4] < 1e-6 * r[0], "residuals after 1..5 Newton iterations: {r:?}");
+}
