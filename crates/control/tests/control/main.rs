@@ -1,0 +1,5 @@
+//! The anima-control test binary: state-machine semantics, controller files, optimisers.
+
+mod files;
+mod machines;
+mod optimise;
