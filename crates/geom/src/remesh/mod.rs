@@ -28,6 +28,7 @@
 
 mod mesh;
 mod ops;
+pub mod sizing;
 
 pub use mesh::{AdaptiveMesh, AdaptiveMeshError, ChangeLog, NONE, NewVertex, OpCounts, OpError, Renumbering};
 pub use ops::{OpGuards, loop_points};
