@@ -26,12 +26,15 @@
 //! time stamps, thresholds of Tables 5.1–5.5); the cloth crate decides which edges to refine and calls
 //! these operators.
 
+pub mod local_mesh;
 mod mesh;
 mod ops;
+mod region;
 pub mod sizing;
 
 pub use mesh::{AdaptiveMesh, AdaptiveMeshError, ChangeLog, NONE, NewVertex, OpCounts, OpError, Renumbering};
 pub use ops::{OpGuards, loop_points};
+pub use region::{ContourRule, RegionError, RegionRemeshing, RegionReport, border_density};
 
 #[cfg(test)]
 mod tests;
