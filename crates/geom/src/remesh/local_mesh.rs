@@ -14,7 +14,7 @@
 //! 3. **Improvement.** Delaunay flips of interior edges remove bad triangles, and Laplacian smoothing
 //!    moves each new vertex to the mean of its neighbours when that keeps every triangle proper.
 //!
-//! The size rule follows the spec's reconstruction [R] of the density factor's direction: the
+//! The size rule follows the spec's reconstruction (spec reconstruction) of the density factor's direction: the
 //! target size of border edge j is h_j = L⁰_j·0.85/d, so a larger density d means a finer mesh.
 //! [`mesh_hole_with_retries`] adds the thesis's retry loop (spec §6.6, A-38).
 
@@ -29,7 +29,7 @@ use super::mesh::{cross2, is_proper};
 pub enum MeshSize {
     /// One target edge length everywhere, m.
     Uniform(f64),
-    /// Oliveira's density factor d (spec §6.4, §6.6 [R]): border edge j asks for h_j = L⁰_j·0.85/d.
+    /// Oliveira's density factor d (spec §6.4, §6.6 (spec reconstruction)): border edge j asks for h_j = L⁰_j·0.85/d.
     Density(f64),
 }
 
@@ -553,7 +553,7 @@ pub struct RetryRule {
     pub short_edge: Option<f64>,
     /// The refinement percentage (1.01 in the thesis).
     pub factor: f64,
-    /// At most this many generations (50 [R]).
+    /// At most this many generations (50 (spec reconstruction)).
     pub max_tries: usize,
 }
 
@@ -711,7 +711,7 @@ mod tests {
         let fine = mesh_hole(&loops, &LocalMeshParams::new(MeshSize::Density(3.4))).unwrap();
         check(&loops, &coarse, "L coarse");
         check(&loops, &fine, "L fine");
-        // A larger density factor gives a finer mesh (spec §6.6 [R]).
+        // A larger density factor gives a finer mesh (spec §6.6 (spec reconstruction)).
         assert!(
             fine.triangles.len() > 3 * coarse.triangles.len(),
             "{} vs {}",

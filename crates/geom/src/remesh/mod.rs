@@ -31,10 +31,12 @@ mod mesh;
 mod ops;
 mod region;
 pub mod sizing;
+pub mod subdivision;
 
 pub use mesh::{AdaptiveMesh, AdaptiveMeshError, ChangeLog, NONE, NewVertex, OpCounts, OpError, Renumbering};
 pub use ops::{OpGuards, loop_points};
 pub use region::{ContourRule, RegionError, RegionRemeshing, RegionReport, border_density};
+pub use subdivision::{Subdivision, SubdivisionError};
 
 #[cfg(test)]
 mod tests;

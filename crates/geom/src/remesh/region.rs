@@ -12,10 +12,10 @@ use super::mesh::{AdaptiveMesh, NONE, OpError};
 pub enum ContourRule {
     /// Keep them as they are.
     Keep,
-    /// Refinement: bisect each contour edge with rest length ≥ `min_length` (L⁰_min guard [R]).
+    /// Refinement: bisect each contour edge with rest length ≥ `min_length` (L⁰_min guard (spec reconstruction)).
     Bisect { min_length: f64 },
     /// Simplification: drop a contour vertex whose two contour edges are collinear in rest space, if
-    /// the merged edge stays ≤ `max_length` (L⁰_max guard [R]) and the vertex is not locked.
+    /// the merged edge stays ≤ `max_length` (L⁰_max guard (spec reconstruction)) and the vertex is not locked.
     MergeStraight { max_length: f64 },
 }
 
