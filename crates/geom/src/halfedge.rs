@@ -290,10 +290,24 @@ impl HalfEdges {
         if 2 * n_interior + self.n_boundary_edges() != self.n_half_edges() {
             return Err("half-edge count does not match the edges".to_owned());
         }
+        let mut degree = vec![0usize; self.n_vertices()];
+        for tri in &self.triangles {
+            for &v in tri {
+                degree[v as usize] += 1;
+            }
+        }
         for v in 0..self.n_vertices() as u32 {
             let h = self.vertex_half[v as usize];
             if h != NO_TWIN && self.origin(h) != v {
                 return Err(format!("vertex {v}'s half-edge does not start at it"));
+            }
+            // A manifold vertex's faces form one fan: walking it must reach every incident face.
+            let reached = self.vertex_faces(v).len();
+            if reached != degree[v as usize] {
+                return Err(format!(
+                    "vertex {v} is pinched: its fan reaches {reached} of {} faces",
+                    degree[v as usize]
+                ));
             }
         }
         Ok(())
@@ -345,6 +359,13 @@ mod tests {
         );
         // Three triangles on one edge.
         assert!(HalfEdges::new(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).is_err());
+    }
+
+    #[test]
+    fn pinched_vertex_fails_the_invariants() {
+        // Two triangles touching only at vertex 0: a valid edge manifold, but not a vertex manifold.
+        let h = HalfEdges::new(5, &[[0, 1, 2], [0, 3, 4]]).unwrap();
+        assert!(h.check_invariants().unwrap_err().contains("pinched"));
     }
 
     #[test]

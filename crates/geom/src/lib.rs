@@ -17,6 +17,7 @@ pub mod obj;
 mod obj_read;
 pub mod obt;
 pub mod query;
+pub mod remesh;
 mod shapes;
 
 pub use glam::{DVec2, DVec3};
