@@ -4,6 +4,7 @@
 mod bench;
 mod figures;
 mod oliveira;
+mod oliveira_implicit;
 mod reproduce;
 
 use std::path::PathBuf;
@@ -23,7 +24,8 @@ enum Command {
     /// Re-run a thesis experiment and print the thesis's numbers beside ours:
     /// table-4-1, e-2 … e-8, or all (which also writes docs/reproduction/flex3d-results.md).
     /// Oliveira 2013's drapes on static meshes: oliveira-1, oliveira-2, oliveira-3, or oliveira (all three,
-    /// which also writes docs/reproduction/oliveira-results.md).
+    /// which also writes docs/reproduction/oliveira-results.md); oliveira-implicit: the fine drapes with
+    /// implicit integrators against a converged reference (docs/reproduction/oliveira-implicit.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the scene experiments: literal (default) or viscous.

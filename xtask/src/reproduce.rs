@@ -41,6 +41,9 @@ impl Report {
 }
 
 pub fn run(experiment: &str, friction: &str) -> Result<()> {
+    if experiment == "oliveira-implicit" {
+        return crate::oliveira_implicit::reproduce();
+    }
     if let Some(which) = experiment.strip_prefix("oliveira") {
         return crate::oliveira::reproduce(which);
     }

@@ -199,6 +199,11 @@ pub struct Options {
     /// Skip the exact path test of a particle whose path cannot reach any object (its length is below
     /// a lower bound on its distance from every surface). Changes no result; off only to check that.
     pub cull_collision_tests: bool,
+    /// Provot's (1995) strain limit, an anima addition for large steps: after each step, springs
+    /// stretched beyond (1 + τ)·L⁰ are shortened back to it (ends moved in inverse proportion to their
+    /// masses, in up to ten sweeps) and the velocities take the correction over the step. `None` (the
+    /// default, as in the thesis) leaves the springs alone; Provot used τ = 0.1.
+    pub strain_limit: Option<f64>,
 }
 
 impl Options {
@@ -212,6 +217,7 @@ impl Options {
             recheck_corrected_path: true,
             edge_contacts: false,
             cull_collision_tests: true,
+            strain_limit: None,
         }
     }
 }

@@ -123,6 +123,27 @@ pub fn spring_jacobians(
     (k, c)
 }
 
+/// [`spring_jacobians`] with the geometric term clamped at zero, which is what the implicit
+/// integrators assemble: a compressed two-sided spring's (1 − L⁰/|d|) < 0 would make K indefinite.
+pub fn definite_spring_jacobians(
+    xi: DVec3,
+    xj: DVec3,
+    rest_length: f64,
+    stiffness: f64,
+    damping: f64,
+    law: SpringLaw,
+    damper: DamperLaw,
+) -> (DMat3, DMat3) {
+    let (k, c) = spring_jacobians(xi, xj, rest_length, stiffness, damping, law, damper);
+    let len = (xj - xi).length();
+    if law == SpringLaw::TwoSided && len > 0.0 && len < rest_length {
+        let u = (xj - xi) / len;
+        (DMat3::from_cols(u * u.x, u * u.y, u * u.z) * stiffness, c)
+    } else {
+        (k, c)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
