@@ -3,6 +3,7 @@
 
 mod bench;
 mod figures;
+mod nunes;
 mod oliveira;
 mod reproduce;
 
@@ -24,6 +25,8 @@ enum Command {
     /// table-4-1, e-2 … e-8, or all (which also writes docs/reproduction/flex3d-results.md).
     /// Oliveira 2013's drapes on static meshes: oliveira-1, oliveira-2, oliveira-3, or oliveira (all three,
     /// which also writes docs/reproduction/oliveira-results.md).
+    /// Nunes 2006's controllers: nunes-walk, or nunes (all, which also writes
+    /// docs/reproduction/nunes-results.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the scene experiments: literal (default) or viscous.

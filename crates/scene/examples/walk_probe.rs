@@ -22,8 +22,12 @@ fn main() {
                 ch.controller.machines().iter().map(|m| format!("{:?}", m.current_state())).collect();
             eprintln!(
                 "{k:5} com ({:.2}, {:.2}) v {:.2} pelvis_y {:.2} support {:?} states {}",
-                s.com[0], s.com[1], s.com_velocity[0],
-                s.body_position[s.layout.pelvis.unwrap()][1], s.support, st.join(",")
+                s.com[0],
+                s.com[1],
+                s.com_velocity[0],
+                s.body_position[s.layout.pelvis.unwrap()][1],
+                s.support,
+                st.join(",")
             );
         }
     })

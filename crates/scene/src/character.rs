@@ -41,16 +41,42 @@ pub enum CharacterError {
 /// One sensor's computation, resolved once from its kind and arguments.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Binding {
-    FootUp { model: usize, side: usize },
-    CogAhead { model: usize, side: usize },
-    Landing { model: usize, side: usize, combine: LandCombine },
-    FallingForward { model: usize },
-    FallingBackward { model: usize },
-    FootOnHands { acrobat: usize, pusher: usize },
-    FlipBrake { model: usize },
-    BothFeetDown { model: usize },
-    CogLow { model: usize },
-    TrunkAngle { model: usize, joint: usize },
+    FootUp {
+        model: usize,
+        side: usize,
+    },
+    CogAhead {
+        model: usize,
+        side: usize,
+    },
+    Landing {
+        model: usize,
+        side: usize,
+        combine: LandCombine,
+    },
+    FallingForward {
+        model: usize,
+    },
+    FallingBackward {
+        model: usize,
+    },
+    FootOnHands {
+        acrobat: usize,
+        pusher: usize,
+    },
+    FlipBrake {
+        model: usize,
+    },
+    BothFeetDown {
+        model: usize,
+    },
+    CogLow {
+        model: usize,
+    },
+    TrunkAngle {
+        model: usize,
+        joint: usize,
+    },
     /// Always 0 (a sensor the adapter was told to ignore).
     Never,
 }
@@ -207,7 +233,11 @@ impl Character {
                 "landing" => Binding::Landing {
                     model,
                     side: side()?,
-                    combine: if s.args.iter().any(|a| a == "and") { LandCombine::And } else { LandCombine::Or },
+                    combine: if s.args.iter().any(|a| a == "and") {
+                        LandCombine::And
+                    } else {
+                        LandCombine::Or
+                    },
                 },
                 "falling_forward" => Binding::FallingForward { model },
                 "falling_backward" => Binding::FallingBackward { model },

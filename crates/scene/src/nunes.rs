@@ -121,7 +121,8 @@ pub fn walk(
     let mut done = 0;
     for k in 0..iterations {
         for p in pushes {
-            if k >= p.at && k < p.at + p.duration
+            if k >= p.at
+                && k < p.at + p.duration
                 && let Some(h) = head
             {
                 let at = c.env.sensors[0].body_position[h];
