@@ -57,7 +57,7 @@ pub fn optimise_logged<O: Optimiser + ?Sized>(
             fs.join(" ")
         };
         eprintln!(
-            "{run_name}: generation {:3} stage {} (0 = initial point) evaluations {:4}: {shown}  best {best:.3}",
+            "{run_name}: generation {:3} stage {} evaluations {:4}: {shown}  best {best:.3}",
             log.generations - 1,
             new[0].stage + 1,
             log.len()

@@ -152,3 +152,11 @@ pub fn walk(
     let distance = c.env.sensors[0].com[0] - x0;
     Ok(WalkOutcome { iterations: done, distance, fell, stopped })
 }
+
+/// The thrower (both hands welded to the ball) standing on the ground, driven by `controller`.
+pub fn thrower_character(controller: Controller) -> Result<Character, CharacterError> {
+    let mut world = World::new(world_settings(SUBSTEPS))?;
+    let sk = BuiltinSkeleton::Thrower.load().with_actuation(actuation())?;
+    world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
+    Character::new(world, controller, procedures(), &[])
+}
