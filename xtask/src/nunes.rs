@@ -69,9 +69,10 @@ pub fn optimise_logged<O: Optimiser + ?Sized>(
 
 pub fn reproduce(which: &str) -> Result<()> {
     let chosen: Vec<&str> = match which {
-        "" => vec!["walk"],
+        "" => vec!["walk", "throw"],
         "-walk" => vec!["walk"],
-        other => bail!("unknown experiment `nunes{other}`; expected nunes-walk or nunes"),
+        "-throw" => vec!["throw"],
+        other => bail!("unknown experiment `nunes{other}`; expected nunes-walk, nunes-throw or nunes"),
     };
     let mut doc = String::from("# Nunes 2006 reproduction: measured results\n\n");
     doc.push_str("Written by `cargo xtask reproduce nunes`; see `nunes.md` for the set-up.\n\n");
@@ -79,6 +80,7 @@ pub fn reproduce(which: &str) -> Result<()> {
         let start = Instant::now();
         let text = match e {
             "walk" => walk()?,
+            "throw" => throw()?,
             _ => unreachable!(),
         };
         let text = format!("{text}\n_Run time: {:.1} s._\n\n", start.elapsed().as_secs_f64());
@@ -202,5 +204,85 @@ fn walk() -> Result<String> {
         .map(|e| format!("{:.3}", e.fitness))
         .collect();
     let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
+    Ok(s)
+}
+
+/// The throw's fitness, Eq. 6.1 (spec §7.6).
+pub fn throw_fitness(base: &Controller, ids: &[anima_control::ParamId], x: &[f64]) -> f64 {
+    let mut c = base.clone();
+    c.apply(ids, x);
+    nunes::throw(c, &nunes::BASKET, 2000, |_| ()).map_or(0.0, |o| o.fitness())
+}
+
+/// The thesis's throw optimisation (spec §8.3.2): 400 evaluations, each modifying either (s1, e1)
+/// or (s2, e2, τ2) in a window of ±25 % of the interval centred on the current value.
+fn throw() -> Result<String> {
+    let base = nunes::parse(nunes::THROW_RON)?;
+    let ids = base.free_params(&Selection::all());
+    let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
+    let space = base.space(&ids);
+    let x0 = base.values_of(&ids);
+    let group = |names: &[&str]| -> Vec<usize> {
+        names.iter().map(|n| labels.iter().position(|l| l.contains(n)).expect("throw parameter")).collect()
+    };
+    let groups = vec![group(&["E1/shoulder_l", "E1/elbow_l"]), group(&["E2/shoulder_l", "E2/elbow_l", "T2"])];
+    let stage = Stage {
+        name: "local".into(),
+        dims: (0..ids.len()).collect(),
+        evaluations: 400,
+        modifier: anima_control::optimise::Modifier::LocalSubset {
+            groups,
+            choice: anima_control::optimise::GroupChoice::Random,
+            interval: Interval::PartiallyReduced { fraction: 0.5 },
+        },
+        batch: 1,
+    };
+    let mut opt = GreedySearch::new(space, vec![stage], x0.clone(), SEED)?;
+    let objective = |x: &[f64]| throw_fitness(&base, &ids, x);
+    let log = optimise_logged("throw-greedy", &mut opt, &objective, 401)?;
+    let best = log.best().context("empty log")?;
+    let outcome = |x: &[f64]| -> Result<nunes::ThrowOutcome> {
+        let mut c = base.clone();
+        c.apply(&ids, x);
+        Ok(nunes::throw(c, &nunes::BASKET, 2000, |_| ())?)
+    };
+    let (before, after) = (outcome(&x0)?, outcome(&best.x)?);
+    let mut winner = base.clone();
+    winner.apply(&ids, &best.x);
+    std::fs::write(
+        crate::root().join("assets/controllers/throw-optimised.ron"),
+        format!(
+            "// The throwing controller after the thesis's optimisation (spec §8.3.2): `cargo xtask reproduce\n\
+             // nunes-throw`, 400 evaluations, seed {SEED}. Everything else is assets/controllers/throw.ron.\n{}",
+            winner.to_ron()
+        ),
+    )?;
+    let b = nunes::BASKET;
+    let mut s = String::from("## Throwing a ball into a basket (spec §8.3)\n\n");
+    let _ = writeln!(
+        s,
+        "Basket [GAP]: hoop centre ({:.2}, {:.2}) m, radius {:.2} m. Greedy search, 400 evaluations, \
+         groups (s1, e1) / (s2, e2, τ2) chosen at random, window ±25 % of each interval; seed {SEED}.\n",
+        b.hoop[0], b.hoop[1], b.radius
+    );
+    s.push_str("| quantity | thesis (Nunes 2006) | anima |\n|---|---|---|\n");
+    let _ = writeln!(s, "| fitness (Eq. 6.1) before | 8.079 | {:.3} |", before.fitness());
+    let _ = writeln!(s, "| fitness after 400 evaluations | 11.042 | {:.3} |", after.fitness());
+    let _ = writeln!(
+        s,
+        "| ball through the hoop after | yes (overhand) | {} |",
+        if after.scored { "yes" } else { "no" }
+    );
+    let _ =
+        writeln!(s, "| ball through the hoop before | no | {} |", if before.scored { "yes" } else { "no" });
+    let _ = writeln!(s, "| H_max, Δ_min after (m) | not reported | {:.2}, {:.2} |", after.h_max, after.d_min);
+    let _ = writeln!(s, "| release iteration after | not reported | {:?} |", after.released_at);
+    let accepted = log.evaluations.iter().filter(|e| e.accepted).count();
+    let _ = writeln!(s, "| accepted modifications | not reported | {} |", accepted.saturating_sub(1));
+    let _ = writeln!(
+        s,
+        "\nWinner: {}.",
+        labels.iter().zip(&best.x).map(|(l, v)| format!("{l} = {v:.3}")).collect::<Vec<_>>().join(", ")
+    );
     Ok(s)
 }

@@ -160,3 +160,85 @@ pub fn thrower_character(controller: Controller) -> Result<Character, CharacterE
     world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
     Character::new(world, controller, procedures(), &[])
 }
+
+/// The basket of the throw (spec §8.3, [GAP]: the thesis gives no geometry): hoop centre, m, and
+/// the hoop's radius. Eq. 6.1 measures the distance to the point 0.25 m above the hoop centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Basket {
+    pub hoop: [f64; 2],
+    pub radius: f64,
+}
+
+/// anima's basket: 2.5 m in front of the thrower, hoop 2.5 m high, radius 0.2 m [GAP].
+pub const BASKET: Basket = Basket { hoop: [2.5, 2.5], radius: 0.2 };
+
+/// How a throw ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThrowOutcome {
+    /// Highest ball centre, m.
+    pub h_max: f64,
+    /// Closest approach of the ball centre to the point 0.25 m above the hoop, m.
+    pub d_min: f64,
+    /// The ball fell through the hoop (crossed the hoop's height downwards within its radius).
+    pub scored: bool,
+    pub fell: bool,
+    pub released_at: Option<u64>,
+    pub iterations: u64,
+}
+
+impl ThrowOutcome {
+    /// Eq. 6.1: 10 + H_max/3 − Δ_min, 0 when the thrower falls (spec §7.6).
+    pub fn fitness(&self) -> f64 {
+        if self.fell { 0.0 } else { 10.0 + self.h_max / 3.0 - self.d_min }
+    }
+}
+
+/// Runs a throw until the ball touches the ground after its release (at most `max_iterations`).
+pub fn throw(
+    controller: Controller,
+    basket: &Basket,
+    max_iterations: u64,
+    mut observe: impl FnMut(&Character),
+) -> Result<ThrowOutcome, CharacterError> {
+    let mut c = thrower_character(controller)?;
+    let ball = c.env.world.skeleton(0)?.body_index("ball").expect("the thrower has a ball");
+    let target = [basket.hoop[0], basket.hoop[1] + 0.25];
+    let rules = WalkRules::default();
+    let mut out = ThrowOutcome {
+        h_max: f64::NEG_INFINITY,
+        d_min: f64::INFINITY,
+        scored: false,
+        fell: false,
+        released_at: None,
+        iterations: 0,
+    };
+    let mut prev = c.env.sensors[0].body_position[ball];
+    for k in 0..max_iterations {
+        c.step()?;
+        out.iterations = k + 1;
+        observe(&c);
+        let s = &c.env.sensors[0];
+        let p = s.body_position[ball];
+        out.h_max = out.h_max.max(p[1]);
+        out.d_min = out.d_min.min(((p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)).sqrt());
+        if prev[1] >= basket.hoop[1] && p[1] < basket.hoop[1] {
+            let t = (prev[1] - basket.hoop[1]) / (prev[1] - p[1]);
+            let x = prev[0] + t * (p[0] - prev[0]);
+            out.scored |= (x - basket.hoop[0]).abs() < basket.radius;
+        }
+        prev = p;
+        let feet = s.layout.feet;
+        let body_down =
+            s.on_ground.iter().enumerate().any(|(b, &g)| g && b != ball && !feet.contains(&Some(b)));
+        let low = s.layout.pelvis.is_some_and(|pv| s.body_position[pv][1] < rules.min_pelvis_height);
+        if body_down || low || !s.all_finite() {
+            out.fell = true;
+            break;
+        }
+        out.released_at = c.env.released_at;
+        if out.released_at.is_some() && s.on_ground[ball] {
+            break;
+        }
+    }
+    Ok(out)
+}
