@@ -47,6 +47,9 @@ pub fn run(experiment: &str, friction: &str) -> Result<()> {
     if let Some(which) = experiment.strip_prefix("oliveira") {
         return crate::oliveira::reproduce(which);
     }
+    if let Some(which) = experiment.strip_prefix("nunes") {
+        return crate::nunes::reproduce(which);
+    }
     let friction = match friction {
         "literal" => FrictionMode::Literal,
         "viscous" => FrictionMode::Viscous,

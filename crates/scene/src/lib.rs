@@ -10,8 +10,10 @@
 //! writes `.OBT`). It checks what the grammar and the specification's validation rules say (counts,
 //! index ranges, positive times and masses); whether a scene is physically sensible is not its business.
 
+pub mod character;
 mod error;
 mod load;
+pub mod nunes;
 pub mod oliveira;
 pub mod par;
 pub mod ron_scene;

@@ -1,0 +1,319 @@
+//! Characters: an anima-control [`Controller`] driving the articulated models of an anima-body
+//! [`World`] — the adapter between the two crates (spec §3.2, §6.9).
+//!
+//! Each control iteration of Δt (0.05 s in the thesis, spec §3.1–§3.2):
+//!
+//! 1. every model is sensed into its [`Sensors`] reading (no allocation);
+//! 2. the controller steps: its sensor queries are answered by the body's sensor catalogue
+//!    ([`sensors::catalogue`]), through a binding made once per sensor when the character is built;
+//!    its procedures act on the world (`release_ball` releases the hand–ball welds, `push` applies a
+//!    force);
+//! 3. its target signals become the models' actuator [`Commands`](anima_body::Commands), one
+//!    [`Signal`] per signal, which the body averages by Eqs. 5.1–5.2;
+//! 4. the world advances Δt in its physics sub-steps (`WorldSettings::substeps`).
+//!
+//! Actuator names are a model's own (`hip_l`) for a one-model character, or `alias/name`
+//! (`acrobat/hip_l`, `pusher/hip_l`) with the aliases given when the character is built. Sensor
+//! arguments that are model aliases select the model; `left`/`right` select the side; `or`/`and`
+//! combine the landing tests.
+
+use anima_body::sensors::catalogue::{self, LandCombine};
+use anima_body::{BodyError, Sensors, Signal, Target, TargetFrame, World};
+use anima_control::{
+    Controller, ControllerError, Frame, Procedures, SensorInput, SensorQuery, TargetKind, Targets,
+};
+
+/// What can go wrong when a controller is bound to a world.
+#[derive(Debug, thiserror::Error)]
+pub enum CharacterError {
+    #[error(transparent)]
+    Controller(#[from] ControllerError),
+    #[error(transparent)]
+    Body(#[from] BodyError),
+    #[error(transparent)]
+    Skeleton(#[from] anima_body::SkeletonError),
+    #[error("controller actuator `{0}` names no actuator of the world's models")]
+    Actuator(String),
+    #[error("sensor `{name}`: {why}")]
+    Sensor { name: String, why: String },
+}
+
+/// One sensor's computation, resolved once from its kind and arguments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Binding {
+    FootUp {
+        model: usize,
+        side: usize,
+    },
+    CogAhead {
+        model: usize,
+        side: usize,
+    },
+    Landing {
+        model: usize,
+        side: usize,
+        combine: LandCombine,
+    },
+    FallingForward {
+        model: usize,
+    },
+    FallingBackward {
+        model: usize,
+    },
+    FootOnHands {
+        acrobat: usize,
+        pusher: usize,
+    },
+    FlipBrake {
+        model: usize,
+    },
+    BothFeetDown {
+        model: usize,
+    },
+    CogLow {
+        model: usize,
+    },
+    TrunkAngle {
+        model: usize,
+        joint: usize,
+    },
+    /// Always 0 (a sensor the adapter was told to ignore).
+    Never,
+}
+
+/// The controller's environment: the world, one sensor reading per model, the sensor bindings. It
+/// answers the controller's sensor queries and is what procedures act on.
+#[derive(Debug)]
+pub struct BodyEnv {
+    pub world: World,
+    /// Per model, the reading the current iteration's sensors use.
+    pub sensors: Vec<Sensors>,
+    bindings: Vec<Binding>,
+    /// Controller actuator → (model, actuator of that model).
+    actuators: Vec<(usize, usize)>,
+    /// The iteration at which `release_ball` fired, if it has.
+    pub released_at: Option<u64>,
+    iteration: u64,
+}
+
+impl BodyEnv {
+    /// The control iteration being computed (0 = the first).
+    pub fn iteration(&self) -> u64 {
+        self.iteration
+    }
+
+    /// Releases every weld of every model that still holds (the thesis's ball release, §4.5.3).
+    pub fn release_all_welds(&mut self) -> Result<(), BodyError> {
+        for m in 0..self.world.n_models() {
+            for w in 0..self.world.skeleton(m)?.n_welds() {
+                if self.world.weld_holds(m, w)? {
+                    self.world.release_weld(m, w)?;
+                }
+            }
+        }
+        self.released_at.get_or_insert(self.iteration);
+        Ok(())
+    }
+}
+
+fn param(params: &[f64], k: usize) -> f64 {
+    params.get(k).copied().unwrap_or(0.0)
+}
+
+impl SensorInput for BodyEnv {
+    fn sensor(&mut self, q: &SensorQuery<'_>) -> f64 {
+        let s = &self.sensors;
+        match self.bindings[q.id] {
+            Binding::FootUp { model, side } => catalogue::foot_up(&s[model], side),
+            Binding::CogAhead { model, side } => catalogue::cog_ahead(&s[model], side, param(q.params, 0)),
+            Binding::Landing { model, side, combine } => {
+                catalogue::landing(&s[model], side, param(q.params, 0), combine)
+            }
+            Binding::FallingForward { model } => catalogue::falling_forward(&s[model], param(q.params, 0)),
+            Binding::FallingBackward { model } => catalogue::falling_backward(&s[model], param(q.params, 0)),
+            Binding::FootOnHands { acrobat, pusher } => catalogue::foot_on_hands(&s[acrobat], &s[pusher]),
+            Binding::FlipBrake { model } => catalogue::flip_brake(&s[model], param(q.params, 0)),
+            Binding::BothFeetDown { model } => catalogue::both_feet_down(&s[model]),
+            Binding::CogLow { model } => catalogue::cog_low(&s[model], param(q.params, 0)),
+            Binding::TrunkAngle { model, joint } => catalogue::trunk_angle(&s[model], joint),
+            Binding::Never => 0.0,
+        }
+    }
+
+    fn actuator_angle(&mut self, actuator: usize, frame: Frame) -> Option<f64> {
+        let (m, a) = *self.actuators.get(actuator)?;
+        match frame {
+            Frame::Parent => Some(self.sensors[m].actuator_angle[a]),
+            Frame::World => None,
+        }
+    }
+}
+
+/// The procedures every character offers besides the controller crate's built-ins:
+///
+/// - `release_ball`: releases every hand–ball weld (spec §8.3.1, on the throw's T2);
+/// - `push(model, body, fx, fy)`: applies a force (N) at a body's centre for this iteration (spec
+///   §3.6; model and body by name, e.g. `push("", "head", -150, 0)`).
+pub fn procedures() -> Procedures<BodyEnv> {
+    let mut p: Procedures<BodyEnv> = Procedures::with_builtins();
+    p.register("release_ball", |ctx| {
+        // A release of welds that exist cannot fail; nothing to report from inside a step.
+        let _ = ctx.env.release_all_welds();
+    });
+    p.register("push", |ctx| {
+        let args = ctx.args().to_vec();
+        let num = |k: usize| args.get(k).and_then(|a| a.parse::<f64>().ok()).unwrap_or(0.0);
+        let env = &mut *ctx.env;
+        let model = (0..env.world.n_models())
+            .find(|&m| env.world.skeleton(m).is_ok_and(|sk| sk.name() == args[0]))
+            .unwrap_or(0);
+        let Some(body) = env.world.skeleton(model).ok().and_then(|sk| sk.body_index(&args[1])) else {
+            return;
+        };
+        let at = env.sensors[model].body_position[body];
+        let _ = env.world.apply_force(model, body, [num(2), num(3)], at);
+    });
+    p
+}
+
+/// A controller bound to a world. Build with [`Character::new`], then call [`Character::step`] once
+/// per control iteration.
+#[derive(Debug)]
+pub struct Character {
+    pub env: BodyEnv,
+    pub controller: Controller,
+    procedures: Procedures<BodyEnv>,
+    targets: Targets,
+}
+
+fn side_of(args: &[String]) -> Option<usize> {
+    args.iter().find_map(|a| match a.as_str() {
+        "left" => Some(0),
+        "right" => Some(1),
+        _ => None,
+    })
+}
+
+impl Character {
+    /// Binds `controller` to `world`. `aliases[m]` is the prefix of model m's actuator names in the
+    /// controller (`"acrobat"` for `acrobat/hip_l`); with a single model, pass `&[]` and use the
+    /// model's own names. `procedures` must be the registry the controller was parsed with (start
+    /// from [`procedures`]).
+    pub fn new(
+        world: World,
+        controller: Controller,
+        procedures: Procedures<BodyEnv>,
+        aliases: &[&str],
+    ) -> Result<Self, CharacterError> {
+        let n_models = world.n_models();
+        let model_of = |name: &str| aliases.iter().position(|a| *a == name);
+        let mut actuators = Vec::with_capacity(controller.actuators().len());
+        for name in controller.actuators() {
+            let (m, local) = match name.split_once('/') {
+                Some((alias, local)) => {
+                    (model_of(alias).ok_or_else(|| CharacterError::Actuator(name.clone()))?, local)
+                }
+                None => (0, name.as_str()),
+            };
+            let a = world
+                .skeleton(m)?
+                .actuator_index(local)
+                .ok_or_else(|| CharacterError::Actuator(name.clone()))?;
+            actuators.push((m, a));
+        }
+        let mut bindings = Vec::with_capacity(controller.sensors().len());
+        for s in controller.sensors() {
+            let models: Vec<usize> = s.args.iter().filter_map(|a| model_of(a)).collect();
+            let model = models.first().copied().unwrap_or(0);
+            let err = |why: &str| CharacterError::Sensor { name: s.name.clone(), why: why.into() };
+            let side = || side_of(&s.args).ok_or_else(|| err("needs a side, `left` or `right`"));
+            let b = match s.kind.as_str() {
+                "foot_up" => Binding::FootUp { model, side: side()? },
+                "cog_ahead" => Binding::CogAhead { model, side: side()? },
+                "landing" => Binding::Landing {
+                    model,
+                    side: side()?,
+                    combine: if s.args.iter().any(|a| a == "and") {
+                        LandCombine::And
+                    } else {
+                        LandCombine::Or
+                    },
+                },
+                "falling_forward" => Binding::FallingForward { model },
+                "falling_backward" => Binding::FallingBackward { model },
+                "foot_on_hands" => {
+                    let acrobat = model_of("acrobat").unwrap_or(0);
+                    let pusher = model_of("pusher").unwrap_or(1.min(n_models.saturating_sub(1)));
+                    Binding::FootOnHands { acrobat, pusher }
+                }
+                "flip_brake" => Binding::FlipBrake { model },
+                "both_feet_down" => Binding::BothFeetDown { model },
+                "cog_low" => Binding::CogLow { model },
+                "trunk_angle" => {
+                    let joint =
+                        world.skeleton(model)?.joint_index("waist").ok_or_else(|| err("no `waist` joint"))?;
+                    Binding::TrunkAngle { model, joint }
+                }
+                "never" => Binding::Never,
+                other => return Err(err(&format!("unknown sensor kind `{other}`"))),
+            };
+            bindings.push(b);
+        }
+        let sensors = (0..n_models).map(|m| Sensors::new(&world, m)).collect::<Result<Vec<_>, _>>()?;
+        let targets = controller.new_targets();
+        let mut c = Self {
+            env: BodyEnv { world, sensors, bindings, actuators, released_at: None, iteration: 0 },
+            controller,
+            procedures,
+            targets,
+        };
+        c.sense()?;
+        Ok(c)
+    }
+
+    fn sense(&mut self) -> Result<(), BodyError> {
+        for s in &mut self.env.sensors {
+            self.env.world.sense(s)?;
+        }
+        Ok(())
+    }
+
+    /// The registry the controller runs with.
+    pub fn procedures(&self) -> &Procedures<BodyEnv> {
+        &self.procedures
+    }
+
+    /// The signals sent in the last iteration.
+    pub fn targets(&self) -> &Targets {
+        &self.targets
+    }
+
+    /// (model, actuator) of each controller actuator.
+    pub fn actuator_map(&self) -> &[(usize, usize)] {
+        &self.env.actuators
+    }
+
+    /// One control iteration: sense, run the controller, command the actuators, step the world.
+    pub fn step(&mut self) -> Result<(), BodyError> {
+        self.env.iteration = self.controller.iteration();
+        self.controller.step(&mut self.env, &self.procedures, &mut self.targets);
+        for m in 0..self.env.world.n_models() {
+            self.env.world.commands_mut(m)?.clear();
+        }
+        for s in self.targets.signals() {
+            let (m, actuator) = self.env.actuators[s.actuator];
+            let target = match s.target {
+                TargetKind::Angle(a) => Target::Angle(a),
+                TargetKind::NoTorque => Target::NoTorque,
+                TargetKind::DampingOnly => Target::DampingOnly,
+            };
+            let frame = match s.frame {
+                Frame::Parent => TargetFrame::Parent,
+                Frame::World => TargetFrame::World,
+            };
+            self.env.world.commands_mut(m)?.push(Signal { actuator, target, frame, weight: s.weight })?;
+        }
+        self.env.world.step()?;
+        self.sense()
+    }
+}

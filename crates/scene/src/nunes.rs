@@ -1,0 +1,244 @@
+//! The experiments of Nunes 2006 Chapter 6 on anima's bodies and controllers: worlds, evaluators and
+//! fitness functions (spec §7.4, §7.6). The optimisation runs themselves live in `cargo xtask
+//! reproduce nunes-*`; this module is what they, the tests and the figures share.
+
+use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, SolverSettings, World, WorldSettings};
+use anima_control::Controller;
+
+use crate::character::{Character, CharacterError, procedures};
+
+/// The shipped controllers, embedded so tests and tools need no paths.
+pub const WALK_RON: &str = include_str!("../../../assets/controllers/walk.ron");
+pub const WALK_OPTIMISED_RON: &str = include_str!("../../../assets/controllers/walk-optimised.ron");
+pub const THROW_RON: &str = include_str!("../../../assets/controllers/throw.ron");
+pub const BACKFLIP_RON: &str = include_str!("../../../assets/controllers/backflip.ron");
+
+/// The control step of the thesis, seconds (spec §3.1: 20 iterations = 1 s).
+pub const DT: f64 = 0.05;
+
+/// The world every experiment runs in: Δt = 0.05 s, g = 9.81, ground μ = 1, with `substeps` physics
+/// steps per control step (one Rapier sub-step each).
+pub fn world_settings(substeps: u32) -> WorldSettings {
+    WorldSettings {
+        dt: DT,
+        substeps,
+        solver: SolverSettings { iterations: 1, pgs_iterations: 1, sleeping: false },
+        ..WorldSettings::thesis()
+    }
+}
+
+/// The actuation the experiments use: implicit springs (backward Euler, no torque cap), gains ×100
+/// (`docs/body.md`: the thesis's gains cannot hold the body under g = 9.81).
+pub fn actuation() -> Actuation {
+    Actuation { mode: PdMode::ImplicitSpring, gain_scale: 100.0, torque_limit_rad: 1.0, brake_rad_s: 4.0 }
+}
+
+/// Physics sub-steps per 0.05 s control step in the experiments (h = 0.0125 s).
+pub const SUBSTEPS: u32 = 4;
+
+/// A humanoid standing on the ground, driven by `controller`.
+pub fn humanoid_character(controller: Controller) -> Result<Character, CharacterError> {
+    let mut world = World::new(world_settings(SUBSTEPS))?;
+    let sk = BuiltinSkeleton::Humanoid.load().with_actuation(actuation())?;
+    world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
+    Character::new(world, controller, procedures(), &[])
+}
+
+/// Parses a controller with the character procedures.
+pub fn parse(text: &str) -> Result<Controller, CharacterError> {
+    Ok(Controller::from_ron(text, &procedures())?)
+}
+
+/// A push on a body during a walk (spec §8.1.6, Fig. 6.8): `force` N applied to the head for
+/// `duration` iterations from iteration `at`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Push {
+    pub at: u64,
+    pub duration: u64,
+    pub force: [f64; 2],
+}
+
+/// How a walk ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkOutcome {
+    /// Iterations simulated (all of them unless it fell or stopped).
+    pub iterations: u64,
+    /// Horizontal distance the whole-body centre of mass travelled, m (spec §7.6).
+    pub distance: f64,
+    pub fell: bool,
+    pub stopped: bool,
+}
+
+impl WalkOutcome {
+    /// The thesis's walking fitness: the distance, or 0 after a fall or stop (spec §7.6).
+    pub fn fitness(&self) -> f64 {
+        if self.fell || self.stopped { 0.0 } else { self.distance }
+    }
+}
+
+/// The walking evaluation's failure tests (spec §7.6 [GAP] proposals).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WalkRules {
+    /// Fallen when the pelvis centre is lower than this, m.
+    pub min_pelvis_height: f64,
+    /// Stopped when the centre of mass advances less than `min_advance` m in `window` iterations
+    /// (checked after the first `window` iterations); `window = 0` turns the test off.
+    pub window: u64,
+    pub min_advance: f64,
+    /// Stop the run at the first failure (the optimisation does; a long run to see how far it goes
+    /// does too).
+    pub stop_on_failure: bool,
+}
+
+impl Default for WalkRules {
+    fn default() -> Self {
+        Self { min_pelvis_height: 0.7, window: 100, min_advance: 0.05, stop_on_failure: true }
+    }
+}
+
+/// Whether the model has fallen: a body other than a foot touches the ground, or the pelvis is low.
+pub fn fallen(s: &anima_body::Sensors, rules: &WalkRules) -> bool {
+    let feet = s.layout.feet;
+    let body_down = s.on_ground.iter().enumerate().any(|(b, &g)| g && !feet.contains(&Some(b)));
+    let low = s.layout.pelvis.is_some_and(|p| s.body_position[p][1] < rules.min_pelvis_height);
+    body_down || low || !s.all_finite()
+}
+
+/// Runs a walker for `iterations` control steps (spec §7.4): fitness per §7.6. `observe` sees the
+/// character after every step (for strobe pictures); pass `|_| ()` otherwise.
+pub fn walk(
+    controller: Controller,
+    iterations: u64,
+    rules: &WalkRules,
+    pushes: &[Push],
+    mut observe: impl FnMut(&Character),
+) -> Result<WalkOutcome, CharacterError> {
+    let mut c = humanoid_character(controller)?;
+    let x0 = c.env.sensors[0].com[0];
+    let head = c.env.world.skeleton(0)?.body_index("head");
+    let mut history = std::collections::VecDeque::with_capacity(rules.window as usize + 1);
+    let (mut fell, mut stopped) = (false, false);
+    let mut done = 0;
+    for k in 0..iterations {
+        for p in pushes {
+            if k >= p.at
+                && k < p.at + p.duration
+                && let Some(h) = head
+            {
+                let at = c.env.sensors[0].body_position[h];
+                c.env.world.apply_force(0, h, p.force, at)?;
+            }
+        }
+        c.step()?;
+        done = k + 1;
+        observe(&c);
+        let s = &c.env.sensors[0];
+        if !fell && fallen(s, rules) {
+            fell = true;
+        }
+        if rules.window > 0 {
+            history.push_back(s.com[0]);
+            if history.len() > rules.window as usize {
+                let old = history.pop_front().unwrap_or(s.com[0]);
+                if !stopped && s.com[0] - old < rules.min_advance {
+                    stopped = true;
+                }
+            }
+        }
+        if rules.stop_on_failure && (fell || stopped) {
+            break;
+        }
+    }
+    let distance = c.env.sensors[0].com[0] - x0;
+    Ok(WalkOutcome { iterations: done, distance, fell, stopped })
+}
+
+/// The thrower (both hands welded to the ball) standing on the ground, driven by `controller`.
+pub fn thrower_character(controller: Controller) -> Result<Character, CharacterError> {
+    let mut world = World::new(world_settings(SUBSTEPS))?;
+    let sk = BuiltinSkeleton::Thrower.load().with_actuation(actuation())?;
+    world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
+    Character::new(world, controller, procedures(), &[])
+}
+
+/// The basket of the throw (spec §8.3, [GAP]: the thesis gives no geometry): hoop centre, m, and
+/// the hoop's radius. Eq. 6.1 measures the distance to the point 0.25 m above the hoop centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Basket {
+    pub hoop: [f64; 2],
+    pub radius: f64,
+}
+
+/// anima's basket: 2.5 m in front of the thrower, hoop 2.5 m high, radius 0.2 m [GAP].
+pub const BASKET: Basket = Basket { hoop: [2.5, 2.5], radius: 0.2 };
+
+/// How a throw ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThrowOutcome {
+    /// Highest ball centre, m.
+    pub h_max: f64,
+    /// Closest approach of the ball centre to the point 0.25 m above the hoop, m.
+    pub d_min: f64,
+    /// The ball fell through the hoop (crossed the hoop's height downwards within its radius).
+    pub scored: bool,
+    pub fell: bool,
+    pub released_at: Option<u64>,
+    pub iterations: u64,
+}
+
+impl ThrowOutcome {
+    /// Eq. 6.1: 10 + H_max/3 − Δ_min, 0 when the thrower falls (spec §7.6).
+    pub fn fitness(&self) -> f64 {
+        if self.fell { 0.0 } else { 10.0 + self.h_max / 3.0 - self.d_min }
+    }
+}
+
+/// Runs a throw until the ball touches the ground after its release (at most `max_iterations`).
+pub fn throw(
+    controller: Controller,
+    basket: &Basket,
+    max_iterations: u64,
+    mut observe: impl FnMut(&Character),
+) -> Result<ThrowOutcome, CharacterError> {
+    let mut c = thrower_character(controller)?;
+    let ball = c.env.world.skeleton(0)?.body_index("ball").expect("the thrower has a ball");
+    let target = [basket.hoop[0], basket.hoop[1] + 0.25];
+    let rules = WalkRules::default();
+    let mut out = ThrowOutcome {
+        h_max: f64::NEG_INFINITY,
+        d_min: f64::INFINITY,
+        scored: false,
+        fell: false,
+        released_at: None,
+        iterations: 0,
+    };
+    let mut prev = c.env.sensors[0].body_position[ball];
+    for k in 0..max_iterations {
+        c.step()?;
+        out.iterations = k + 1;
+        observe(&c);
+        let s = &c.env.sensors[0];
+        let p = s.body_position[ball];
+        out.h_max = out.h_max.max(p[1]);
+        out.d_min = out.d_min.min(((p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)).sqrt());
+        if prev[1] >= basket.hoop[1] && p[1] < basket.hoop[1] {
+            let t = (prev[1] - basket.hoop[1]) / (prev[1] - p[1]);
+            let x = prev[0] + t * (p[0] - prev[0]);
+            out.scored |= (x - basket.hoop[0]).abs() < basket.radius;
+        }
+        prev = p;
+        let feet = s.layout.feet;
+        let body_down =
+            s.on_ground.iter().enumerate().any(|(b, &g)| g && b != ball && !feet.contains(&Some(b)));
+        let low = s.layout.pelvis.is_some_and(|pv| s.body_position[pv][1] < rules.min_pelvis_height);
+        if body_down || low || !s.all_finite() {
+            out.fell = true;
+            break;
+        }
+        out.released_at = c.env.released_at;
+        if out.released_at.is_some() && s.on_ground[ball] {
+            break;
+        }
+    }
+    Ok(out)
+}

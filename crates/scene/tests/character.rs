@@ -1,0 +1,110 @@
+//! The controller–body adapter (`anima_scene::character`) and the Nunes 2006 experiments built on it.
+
+use anima_body::sensors::catalogue;
+use anima_body::{Target, TargetFrame};
+use anima_control::{SensorInput, SensorQuery};
+use anima_scene::nunes::{self, WalkRules};
+
+const SMALL: &str = r#"Controller(
+    name: "probe",
+    actuators: ["hip_l", "knee_r", "elbow_l", "ankle_r"],
+    machines: [
+        Machine(name: "A", kind: Constant, weight: 2.0,
+            states: [State(name: "E1", pose: [("hip_l", Angle(0.3)), ("knee_r", Angle(-0.2)), ("elbow_l", NoTorque)])],
+            transitions: [Transition(when: Sensory((kind: "foot_up", args: ["left"])))]),
+        Machine(name: "B", kind: Constant, weight: 0.5,
+            states: [State(name: "E1", pose: [("hip_l", Angle(-0.1)), ("ankle_r", DampingOnly)])],
+            transitions: [Transition(when: Sensory((kind: "cog_ahead", args: ["right"], params: [0.02])))]),
+    ],
+)"#;
+
+#[test]
+fn targets_become_body_signals_and_sensors_answer_from_the_catalogue() {
+    let c = nunes::parse(SMALL).unwrap();
+    let mut ch = nunes::humanoid_character(c).unwrap();
+    for _ in 0..5 {
+        ch.step().unwrap();
+    }
+    let sk = ch.env.world.skeleton(0).unwrap();
+    let idx = |n: &str| sk.actuator_index(n).unwrap();
+    let want = [
+        (idx("hip_l"), Target::Angle(0.3), 2.0),
+        (idx("knee_r"), Target::Angle(-0.2), 2.0),
+        (idx("elbow_l"), Target::NoTorque, 2.0),
+        (idx("hip_l"), Target::Angle(-0.1), 0.5),
+        (idx("ankle_r"), Target::DampingOnly, 0.5),
+    ];
+    let got = ch.env.world.commands(0).unwrap().signals().to_vec();
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (a, t, w) in want {
+        assert!(
+            got.iter()
+                .any(|s| s.actuator == a && s.target == t && s.weight == w && s.frame == TargetFrame::Parent),
+            "missing {a} {t:?} {w} in {got:?}"
+        );
+    }
+    assert_eq!(
+        ch.actuator_map(),
+        &[(0, idx("hip_l")), (0, idx("knee_r")), (0, idx("elbow_l")), (0, idx("ankle_r"))]
+    );
+    // Every sensor of the controller answers what the catalogue says of the same reading.
+    let sensors: Vec<_> = ch.controller.sensors().to_vec();
+    for (id, s) in sensors.iter().enumerate() {
+        let params = [0.02];
+        let q = SensorQuery {
+            id,
+            name: &s.name,
+            kind: &s.kind,
+            args: &s.args,
+            params: &params[..s.params.len()],
+        };
+        let reading = ch.env.sensors[0].clone();
+        let expected = match s.kind.as_str() {
+            "foot_up" => catalogue::foot_up(&reading, 0),
+            "cog_ahead" => catalogue::cog_ahead(&reading, 1, 0.02),
+            k => panic!("unexpected kind {k}"),
+        };
+        assert_eq!(ch.env.sensor(&q), expected, "sensor {}", s.name);
+    }
+    // Standing still: both feet on the ground.
+    assert_eq!(catalogue::foot_up(&ch.env.sensors[0], 0), 0.0);
+}
+
+#[test]
+fn a_short_walk_is_deterministic() {
+    let run = || {
+        let mut trace = Vec::new();
+        let c = nunes::parse(nunes::WALK_RON).unwrap();
+        let out =
+            nunes::walk(c, 200, &WalkRules::default(), &[], |ch| trace.push(ch.env.sensors[0].com)).unwrap();
+        (out, trace)
+    };
+    let (a, ta) = run();
+    let (b, tb) = run();
+    assert_eq!(a, b);
+    assert_eq!(ta, tb);
+    assert_eq!(a.iterations, 200);
+}
+
+#[test]
+fn the_optimised_walker_walks_without_falling() {
+    let c = nunes::parse(nunes::WALK_OPTIMISED_RON).unwrap();
+    let out = nunes::walk(c, 1000, &WalkRules::default(), &[], |_| ()).unwrap();
+    assert!(!out.fell && !out.stopped, "{out:?}");
+    assert_eq!(out.iterations, 1000);
+    assert!(out.distance > 10.0, "{out:?}");
+}
+
+#[test]
+fn the_thrower_releases_the_ball_when_t2_fires() {
+    // T1: 80 iterations in E1 (0–79); T2: τ2 = 20 iterations in E2 (80–99), the release fires on its
+    // switch at the end of iteration 99 (spec §6.7, §8.3.1).
+    let c = nunes::parse(nunes::THROW_RON).unwrap();
+    let mut ch = nunes::thrower_character(c).unwrap();
+    for k in 0..120u64 {
+        ch.step().unwrap();
+        let holds = ch.env.world.weld_holds(0, 0).unwrap() || ch.env.world.weld_holds(0, 1).unwrap();
+        assert_eq!(holds, k < 99, "iteration {k}");
+    }
+    assert_eq!(ch.env.released_at, Some(99));
+}

@@ -1,0 +1,288 @@
+//! `cargo xtask reproduce nunes-walk` (and `nunes` for every Nunes 2006 experiment anima runs): the
+//! thesis's optimisation runs on anima's humanoid, its numbers beside ours (spec §8.5).
+//!
+//! Every run logs each evaluation to `target/nunes/<run>.log.ron` after each generation and resumes
+//! from that log when it is there (delete it to start over): the optimisers are seeded and the
+//! resumed run equals an uninterrupted one.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anima_control::optimise::{GreedySearch, Interval, Objective, Optimiser, RunLog, Stage, resume, run};
+use anima_control::{Controller, Selection};
+use anima_scene::nunes::{self, WalkRules};
+use anyhow::{Context, Result, bail};
+
+/// Seed of every thesis run (the thesis reports none, spec §9).
+pub const SEED: u64 = 2006;
+
+fn log_path(run: &str) -> PathBuf {
+    crate::root().join("target").join("nunes").join(format!("{run}.log.ron"))
+}
+
+/// Runs `opt` to `budget` evaluations, one generation at a time: a stderr line per generation, the log
+/// written after each, resumed from an earlier log of the same run.
+pub fn optimise_logged<O: Optimiser + ?Sized>(
+    run_name: &str,
+    opt: &mut O,
+    objective: &(impl Objective + ?Sized),
+    budget: usize,
+) -> Result<RunLog> {
+    let path = log_path(run_name);
+    let mut log = RunLog::default();
+    if let Ok(text) = std::fs::read_to_string(&path) {
+        let old: RunLog = ron::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+        match resume(opt, &old) {
+            Ok(()) => {
+                eprintln!("{run_name}: resuming after {} logged evaluations ({})", old.len(), path.display());
+                log = old;
+            }
+            Err(e) => eprintln!("{run_name}: not resuming from {} ({e}); starting over", path.display()),
+        }
+    }
+    std::fs::create_dir_all(path.parent().expect("log folder"))?;
+    while log.len() < budget {
+        let before = log.len();
+        run(opt, objective, before + 1, &mut log);
+        if log.len() == before {
+            break;
+        }
+        let best = log.best().map_or(f64::NAN, |e| e.fitness);
+        let new = &log.evaluations[before..];
+        let fs: Vec<String> = new.iter().map(|e| format!("{:.3}", e.fitness)).collect();
+        let shown = if fs.len() > 8 {
+            format!("{} … ({} values)", fs[..8].join(" "), fs.len())
+        } else {
+            fs.join(" ")
+        };
+        eprintln!(
+            "{run_name}: generation {:3} stage {} evaluations {:4}: {shown}  best {best:.3}",
+            log.generations - 1,
+            new[0].stage + 1,
+            log.len()
+        );
+        std::fs::write(&path, ron::ser::to_string_pretty(&log, ron::ser::PrettyConfig::default())?)?;
+    }
+    Ok(log)
+}
+
+pub fn reproduce(which: &str) -> Result<()> {
+    let chosen: Vec<&str> = match which {
+        "" => vec!["walk", "throw"],
+        "-walk" => vec!["walk"],
+        "-throw" => vec!["throw"],
+        other => bail!("unknown experiment `nunes{other}`; expected nunes-walk, nunes-throw or nunes"),
+    };
+    let mut doc = String::from("# Nunes 2006 reproduction: measured results\n\n");
+    doc.push_str("Written by `cargo xtask reproduce nunes`; see `nunes.md` for the set-up.\n\n");
+    for e in chosen {
+        let start = Instant::now();
+        let text = match e {
+            "walk" => walk()?,
+            "throw" => throw()?,
+            _ => unreachable!(),
+        };
+        let text = format!("{text}\n_Run time: {:.1} s._\n\n", start.elapsed().as_secs_f64());
+        print!("{text}");
+        doc.push_str(&text);
+    }
+    if which.is_empty() {
+        std::fs::write(crate::root().join("docs/reproduction/nunes-results.md"), doc)?;
+    }
+    Ok(())
+}
+
+/// The walking controller with the four sensor thresholds set to `x`.
+fn walker(base: &Controller, x: &[f64]) -> Controller {
+    let mut c = base.clone();
+    let ids = c.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+    c.apply(&ids, x);
+    c
+}
+
+/// The walking fitness of §7.6: 1000 iterations, 0 after a fall or a stop.
+pub fn walk_fitness(base: &Controller, x: &[f64]) -> f64 {
+    nunes::walk(walker(base, x), 1000, &WalkRules::default(), &[], |_| ()).map_or(0.0, |o| o.fitness())
+}
+
+/// How far a controller gets in a long run (stops at the first fall; no stop test).
+fn long_run(c: Controller, iterations: u64) -> Result<nunes::WalkOutcome> {
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    Ok(nunes::walk(c, iterations, &rules, &[], |_| ())?)
+}
+
+/// The thesis's main walking experiment (spec §8.1.4–§8.1.6): 15 global + 30 one-parameter
+/// evaluations of the greedy search over p2, p3, p5, p6 ∈ [−0.25, 0.75].
+fn walk() -> Result<String> {
+    let base = nunes::parse(nunes::WALK_RON)?;
+    let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+    let space = base.space(&ids);
+    let x0 = base.values_of(&ids);
+    let all: Vec<usize> = (0..ids.len()).collect();
+    let stages = vec![
+        Stage::global("global", all.clone(), 15),
+        Stage::local_single("single", all, 30, Interval::Fixed),
+    ];
+    let mut opt = GreedySearch::new(space, stages, x0.clone(), SEED)?;
+    let objective = |x: &[f64]| walk_fitness(&base, x);
+    let log = optimise_logged("walk-greedy", &mut opt, &objective, 46)?;
+
+    let before = long_run(walker(&base, &x0), 1000)?;
+    let best = log.best().context("empty log")?;
+    let after = nunes::walk(walker(&base, &best.x), 1000, &WalkRules::default(), &[], |_| ())?;
+    let long = long_run(walker(&base, &best.x), 20_000)?;
+
+    // The optimised controller as an asset.
+    let winner = walker(&base, &best.x);
+    let header = format!(
+        "// The walking controller after the thesis's optimisation (spec §8.1.4): `cargo xtask reproduce\n\
+         // nunes-walk`, greedy search, 15 global + 30 one-parameter evaluations, seed {SEED}; the winner's\n\
+         // thresholds p2, p3, p5, p6 = {}. Everything else is assets/controllers/walk.ron.\n",
+        best.x.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", ")
+    );
+    std::fs::write(
+        crate::root().join("assets/controllers/walk-optimised.ron"),
+        format!("{header}{}", winner.to_ron()),
+    )?;
+
+    let mut s = String::from("## Walking (spec §8.1, Table 6.3)\n\n");
+    s.push_str(
+        "Greedy search, stage 1: 15 global draws; stage 2: 30 one-parameter draws over the whole interval; ",
+    );
+    let _ = writeln!(s, "strict acceptance; seed {SEED}.\n");
+    s.push_str("| evaluation | stage | T2 (m) | T3 (m/s) | T5 (m) | T6 (m/s) | fitness (m) | accepted |\n");
+    s.push_str("|---|---|---|---|---|---|---|---|\n");
+    let mut k_stage = [0usize; 3];
+    for e in &log.evaluations {
+        let label = if e.generation == 0 {
+            "initial".to_string()
+        } else {
+            k_stage[e.stage.min(2)] += 1;
+            k_stage[e.stage.min(2)].to_string()
+        };
+        let _ = writeln!(
+            s,
+            "| {label} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {} |",
+            if e.generation == 0 { "-".to_string() } else { (e.stage + 1).to_string() },
+            e.x[0],
+            e.x[1],
+            e.x[2],
+            e.x[3],
+            e.fitness,
+            if e.accepted { "yes" } else { "" }
+        );
+    }
+    s.push_str("\n| quantity | thesis (Nunes 2006) | anima |\n|---|---|---|\n");
+    let _ = writeln!(
+        s,
+        "| fitness before optimisation (p = 0.25) | 0.000 (falls) | {:.3} ({}) |",
+        before.fitness(),
+        if before.fell { format!("falls after {} iterations", before.iterations) } else { "walks".into() }
+    );
+    let _ = writeln!(s, "| fitness after 45 evaluations (m in 50 s) | 10.528 | {:.3} |", after.fitness());
+    let _ = writeln!(s, "| mean speed over 50 s (m/s) | 0.21 | {:.2} |", after.distance / 50.0);
+    let _ = writeln!(
+        s,
+        "| distance before falling, long run (m) | 45.147 | {:.1}{} |",
+        long.distance,
+        if long.fell {
+            format!(" (falls after {} iterations)", long.iterations)
+        } else {
+            format!(
+                " (still walking after {} iterations = {:.0} s)",
+                long.iterations,
+                long.iterations as f64 * nunes::DT
+            )
+        }
+    );
+    let _ = writeln!(s, "| evaluations | 45 (+ initial) | {} |", log.len() - 1);
+    let accepted: Vec<String> = log
+        .evaluations
+        .iter()
+        .filter(|e| e.accepted && e.generation > 0)
+        .map(|e| format!("{:.3}", e.fitness))
+        .collect();
+    let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
+    Ok(s)
+}
+
+/// The throw's fitness, Eq. 6.1 (spec §7.6).
+pub fn throw_fitness(base: &Controller, ids: &[anima_control::ParamId], x: &[f64]) -> f64 {
+    let mut c = base.clone();
+    c.apply(ids, x);
+    nunes::throw(c, &nunes::BASKET, 2000, |_| ()).map_or(0.0, |o| o.fitness())
+}
+
+/// The thesis's throw optimisation (spec §8.3.2): 400 evaluations, each modifying either (s1, e1)
+/// or (s2, e2, τ2) in a window of ±25 % of the interval centred on the current value.
+fn throw() -> Result<String> {
+    let base = nunes::parse(nunes::THROW_RON)?;
+    let ids = base.free_params(&Selection::all());
+    let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
+    let space = base.space(&ids);
+    let x0 = base.values_of(&ids);
+    let group = |names: &[&str]| -> Vec<usize> {
+        names.iter().map(|n| labels.iter().position(|l| l.contains(n)).expect("throw parameter")).collect()
+    };
+    let groups = vec![group(&["E1/shoulder_l", "E1/elbow_l"]), group(&["E2/shoulder_l", "E2/elbow_l", "T2"])];
+    let stage = Stage {
+        name: "local".into(),
+        dims: (0..ids.len()).collect(),
+        evaluations: 400,
+        modifier: anima_control::optimise::Modifier::LocalSubset {
+            groups,
+            choice: anima_control::optimise::GroupChoice::Random,
+            interval: Interval::PartiallyReduced { fraction: 0.5 },
+        },
+        batch: 1,
+    };
+    let mut opt = GreedySearch::new(space, vec![stage], x0.clone(), SEED)?;
+    let objective = |x: &[f64]| throw_fitness(&base, &ids, x);
+    let log = optimise_logged("throw-greedy", &mut opt, &objective, 401)?;
+    let best = log.best().context("empty log")?;
+    let outcome = |x: &[f64]| -> Result<nunes::ThrowOutcome> {
+        let mut c = base.clone();
+        c.apply(&ids, x);
+        Ok(nunes::throw(c, &nunes::BASKET, 2000, |_| ())?)
+    };
+    let (before, after) = (outcome(&x0)?, outcome(&best.x)?);
+    let mut winner = base.clone();
+    winner.apply(&ids, &best.x);
+    std::fs::write(
+        crate::root().join("assets/controllers/throw-optimised.ron"),
+        format!(
+            "// The throwing controller after the thesis's optimisation (spec §8.3.2): `cargo xtask reproduce\n\
+             // nunes-throw`, 400 evaluations, seed {SEED}. Everything else is assets/controllers/throw.ron.\n{}",
+            winner.to_ron()
+        ),
+    )?;
+    let b = nunes::BASKET;
+    let mut s = String::from("## Throwing a ball into a basket (spec §8.3)\n\n");
+    let _ = writeln!(
+        s,
+        "Basket [GAP]: hoop centre ({:.2}, {:.2}) m, radius {:.2} m. Greedy search, 400 evaluations, \
+         groups (s1, e1) / (s2, e2, τ2) chosen at random, window ±25 % of each interval; seed {SEED}.\n",
+        b.hoop[0], b.hoop[1], b.radius
+    );
+    s.push_str("| quantity | thesis (Nunes 2006) | anima |\n|---|---|---|\n");
+    let _ = writeln!(s, "| fitness (Eq. 6.1) before | 8.079 | {:.3} |", before.fitness());
+    let _ = writeln!(s, "| fitness after 400 evaluations | 11.042 | {:.3} |", after.fitness());
+    let _ = writeln!(
+        s,
+        "| ball through the hoop after | yes (overhand) | {} |",
+        if after.scored { "yes" } else { "no" }
+    );
+    let _ =
+        writeln!(s, "| ball through the hoop before | no | {} |", if before.scored { "yes" } else { "no" });
+    let _ = writeln!(s, "| H_max, Δ_min after (m) | not reported | {:.2}, {:.2} |", after.h_max, after.d_min);
+    let _ = writeln!(s, "| release iteration after | not reported | {:?} |", after.released_at);
+    let accepted = log.evaluations.iter().filter(|e| e.accepted).count();
+    let _ = writeln!(s, "| accepted modifications | not reported | {} |", accepted.saturating_sub(1));
+    let _ = writeln!(
+        s,
+        "\nWinner: {}.",
+        labels.iter().zip(&best.x).map(|(l, v)| format!("{l} = {v:.3}")).collect::<Vec<_>>().join(", ")
+    );
+    Ok(s)
+}
