@@ -29,7 +29,7 @@ use anima_geom::remesh::{AdaptiveMesh, ContourRule, NONE, RegionRemeshing, Subdi
 use anima_geom::{DVec3, MaterialMesh};
 
 use super::cloth::{OliveiraCloth, StepError, StepReport};
-use super::contact::{first_hit, push_out, vertex_normals};
+use super::contact::{first_hit, vertex_normals};
 use super::criteria::{OliveiraRemeshing, edge_components, face_edge_keys, select_edges};
 
 /// Parameters of the 1-to-4 baseline (Table 5.5, "both methods" and "1-to-4 only").
@@ -227,6 +227,7 @@ impl AdaptiveCloth {
     }
 
     /// The cloth, e.g. to set its state in a test through a rebuild.
+    #[cfg(test)]
     pub(crate) fn cloth_mut(&mut self) -> &mut OliveiraCloth {
         &mut self.cloth
     }
@@ -284,38 +285,24 @@ fn sync(mesh: &mut AdaptiveMesh, cloth: &OliveiraCloth) {
     mesh.velocities_mut().copy_from_slice(cloth.velocities());
 }
 
-/// Type-3 test on the particles `new` of a rebuilt state: any inside an object is pushed out.
-fn push_out_new(
-    cloth: &OliveiraCloth,
-    triangles: &[[u32; 3]],
-    x: &mut [DVec3],
-    v: &mut [DVec3],
-    new: &[u32],
-) -> u64 {
-    if cloth.colliders().is_empty() || new.is_empty() {
-        return 0;
-    }
-    let mut normals = vec![DVec3::ZERO; x.len()];
-    vertex_normals(triangles, x, &mut normals);
-    let dt = cloth.next_dt();
+/// Type-3 test on the particles `new` of a rebuilt state: any inside an object is moved to just
+/// outside the nearest surface point and loses its velocity into the surface. (The cloth's
+/// `contact::push_out`, which turns the particle's vertex normal against its motion, was measured to throw
+/// particles inserted on chords under a draped cloth far out of place, so the adaptive drivers use the
+/// nearest-point rule.)
+fn push_out_new(cloth: &OliveiraCloth, x: &mut [DVec3], v: &mut [DVec3], new: &[u32]) -> u64 {
     let mut count = 0;
     for &i in new {
         let i = i as usize;
         for o in cloth.colliders() {
             if o.solid.contains(x[i]) {
-                let mu = 0.5 * (cloth.material().friction + o.friction);
-                let (xn, vn) = push_out(
-                    &o.solid,
-                    x[i],
-                    v[i],
-                    normals[i],
-                    dt,
-                    cloth.restitution(),
-                    mu,
-                    cloth.options().separating,
-                );
-                x[i] = xn;
-                v[i] = vn;
+                let prox = o.solid.proximity(x[i]);
+                let n = (prox.point - x[i]).normalize_or_zero();
+                x[i] = prox.point + n * 1e-6;
+                let vn = v[i].dot(n);
+                if vn < 0.0 {
+                    v[i] -= n * vn;
+                }
                 count += 1;
             }
         }
@@ -354,7 +341,7 @@ fn rebuild_from_adaptive(
         .expect("a remeshed adaptive mesh is a valid material mesh");
     let mut x = mesh.positions().to_vec();
     let mut v = mesh.velocities().to_vec();
-    stats.pushed_out += push_out_new(cloth, &triangles, &mut x, &mut v, &new);
+    stats.pushed_out += push_out_new(cloth, &mut x, &mut v, &new);
     mesh.positions_mut().copy_from_slice(&x);
     mesh.velocities_mut().copy_from_slice(&v);
     cloth.replace_mesh(material, x, v, tracked as usize, gravity);
@@ -543,7 +530,7 @@ fn subdivision_pass(
             vc.push(v[s]);
         }
     }
-    stats.pushed_out += push_out_new(cloth, material.triangles(), &mut xc, &mut vc, &new);
+    stats.pushed_out += push_out_new(cloth, &mut xc, &mut vc, &new);
     let tracked = map[tracked_slot as usize] as usize;
     cloth.replace_mesh(material, xc, vc, tracked, gravity);
     true

@@ -474,18 +474,6 @@ impl OliveiraCloth {
         self.tracked = tracked;
         self.mesh = mesh;
     }
-
-    pub(crate) fn material(&self) -> &Material {
-        &self.material
-    }
-
-    pub(crate) fn restitution(&self) -> f64 {
-        self.restitution
-    }
-
-    pub(crate) fn options(&self) -> &Options {
-        &self.options
-    }
 }
 
 #[cfg(test)]
