@@ -5,6 +5,7 @@ mod bench;
 mod figures;
 mod nunes;
 mod oliveira;
+mod oliveira_adaptive;
 mod oliveira_implicit;
 mod reproduce;
 
@@ -34,6 +35,10 @@ enum Command {
         /// Friction reading for the scene experiments: literal (default) or viscous.
         #[arg(long, default_value = "literal")]
         friction: String,
+        /// With oliveira[-N]: the adaptive runs (uniform meshes and three remeshers), written to
+        /// docs/reproduction/oliveira-adaptive.md.
+        #[arg(long)]
+        adaptive: bool,
     },
     /// Regenerate every reference plot and figure scene into docs/figures/.
     Figures,
@@ -56,7 +61,11 @@ pub fn root() -> PathBuf {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Reproduce { experiment, friction } => reproduce::run(&experiment, &friction),
+        Command::Reproduce { experiment, adaptive: true, .. } => match experiment.strip_prefix("oliveira") {
+            Some(which) => oliveira_adaptive::reproduce(which),
+            None => anyhow::bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
+        },
+        Command::Reproduce { experiment, friction, .. } => reproduce::run(&experiment, &friction),
         Command::Figures => figures::run(),
         Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
     }

@@ -166,6 +166,17 @@ impl<C: Coord> Stepper<C> {
         self.integrator
     }
 
+    /// A fresh stepper for `n_coords` coordinates (after a topology change) with this one's integrator,
+    /// linear solver and Newton iterations; the history starts empty.
+    pub fn resized(&self, n_coords: usize) -> Self {
+        let mut s = Stepper::new(self.integrator, n_coords);
+        if let (Some(from), Some(to)) = (&self.implicit, &mut s.implicit) {
+            to.solver = from.solver;
+            to.newton_iterations = from.newton_iterations;
+        }
+        s
+    }
+
     pub(crate) fn set_solver(&mut self, solver: crate::LinearSolver) {
         if let Some(ws) = &mut self.implicit {
             ws.solver = solver;

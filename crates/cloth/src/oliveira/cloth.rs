@@ -487,6 +487,50 @@ impl OliveiraCloth {
     pub fn model(&self) -> &ClothModel {
         &self.model
     }
+
+    /// Takes a remeshed cloth (the adaptive drivers of `oliveira::adaptive`): the new mesh and its
+    /// particles' state, masses and drag from the new vertex areas, springs from the new edges, bending
+    /// elements from the new interior edges, m_min and k^e_max (hence the next Δt), a fresh stepper of
+    /// the same integrator, and particle P's new index. Time, step count and contact history are kept.
+    pub(crate) fn replace_mesh(
+        &mut self,
+        mesh: MaterialMesh,
+        x: Vec<DVec3>,
+        v: Vec<DVec3>,
+        tracked: usize,
+        gravity: DVec3,
+    ) {
+        let n = x.len();
+        debug_assert!(v.len() == n && mesh.n_vertices() == n && tracked < n);
+        let material = self.material;
+        let areas = mesh.vertex_areas();
+        let mass: Vec<f64> = areas.iter().map(|&a| material.particle_mass(a)).collect();
+        let rest_length = mesh.edge_rest_lengths();
+        let m = &mut self.model;
+        m.springs = Springs {
+            ends: mesh.topology().edges().iter().map(|e| e.vertices).collect(),
+            stiffness: rest_length.iter().map(|&l| material.spring_stiffness(l)).collect(),
+            damping: rest_length.iter().map(|&l| material.spring_damping(l)).collect(),
+            rest_length,
+        };
+        m.bending = BendingElements {
+            stencils: mesh.topology().interior_stencils().iter().map(|s| s.vertices).collect(),
+        };
+        m.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        m.weight = mass.iter().map(|&m| gravity * m).collect();
+        m.drag = areas.iter().map(|&a| material.particle_drag(a)).collect();
+        self.m_min = mass.iter().copied().fold(f64::INFINITY, f64::min);
+        self.k_max = m.springs.max_stiffness();
+        m.mass = mass;
+        m.invalidate_implicit();
+        self.stepper = self.stepper.resized(n);
+        self.now = State::new(x, v);
+        self.next = State::zeros(n);
+        self.clearance = vec![0.0; n];
+        self.responded = vec![false; n];
+        self.tracked = tracked;
+        self.mesh = mesh;
+    }
 }
 
 #[cfg(test)]

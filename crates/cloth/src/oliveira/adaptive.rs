@@ -1,0 +1,795 @@
+//! Adaptive Oliveira cloth: an [`OliveiraCloth`] whose mesh a remesher changes between steps (spec §3.1,
+//! §6, A-25 to A-42), with three remeshers:
+//!
+//! * [`AdaptiveMethod::Oliveira`] — the thesis's own (spec §6): the criteria of [`super::criteria`],
+//!   face-connected components, the density factor, element removal and hole remeshing in material
+//!   space ([`AdaptiveMesh::remesh_region`]) with the retry loop, barycentric transfer of x and v;
+//! * [`AdaptiveMethod::Subdivision`] — the Simnett et al. 2009 1-to-4 baseline of Test III (spec §2.3,
+//!   §7.3, A-42) driven by the same compression, collision and curvature criteria, with the per-depth
+//!   curvature limit cos θ · 0.95^depth, a depth limit, the merge delay and the projection of a colliding
+//!   edge's midpoint onto the object;
+//! * [`AdaptiveMethod::SizingField`] — per-face metrics (curvature, velocity, compression and an
+//!   obstacle-proximity term computed here from the colliders) handed to
+//!   [`anima_geom::remesh::sizing::remesh_to_metric`] at a fixed interval (ARCSim style; not the thesis's).
+//!
+//! After any change the cloth is rebuilt (spec §6.7): state buffers and a fresh stepper of the same
+//! integrator, masses and drag from the new vertex areas (total mass is ρT times the rest area, which
+//! every operation conserves), springs from the edges, bending stencils, m_min/k^e_max and so the next
+//! Δt; particle P follows the renumbering and is locked; new particles found inside an object are pushed
+//! out (type-3 test, A-23).
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use anima_geom::remesh::local_mesh::RetryRule;
+use anima_geom::remesh::sizing::{
+    Metric, MetricRemeshing, SizeLimits, SizingTerms, face_metrics, remesh_to_metric,
+};
+use anima_geom::remesh::{AdaptiveMesh, ContourRule, NONE, RegionRemeshing, Subdivision, border_density};
+use anima_geom::{DVec3, MaterialMesh};
+
+use super::cloth::{OliveiraCloth, StepError, StepReport};
+use super::contact::{first_hit, vertex_normals};
+use super::criteria::{OliveiraRemeshing, edge_components, face_edge_keys, select_edges};
+
+/// Parameters of the 1-to-4 baseline (Table 5.5, "both methods" and "1-to-4 only").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SubdivisionRemeshing {
+    /// c of the compression criterion (70 %).
+    pub compression: f64,
+    /// cos θ_refine at depth 0 (0.97).
+    pub cos_refine: f64,
+    /// The limit at depth i is `cos_refine · depth_factor^i` (95 %).
+    pub depth_factor: f64,
+    /// cos θ_simplify (0.999995): a split edge is merged when its ends and midpoint are this flat.
+    pub cos_simplify: f64,
+    /// Angle guard of the collision criterion (as for the remesher).
+    pub cos_collision_guard: f64,
+    /// Maximum depth (3).
+    pub max_depth: u8,
+    /// A split may be undone only this long after it was made, s (0.1).
+    pub merge_delay_s: f64,
+    /// Move the midpoint of a colliding edge onto the object's surface (Simnett's rule; on).
+    pub project_colliding_midpoints: bool,
+    /// Time between passes, s; 0 = after every step.
+    pub interval_s: f64,
+}
+
+impl SubdivisionRemeshing {
+    /// Table 5.5.
+    pub fn test_3() -> Self {
+        Self {
+            compression: 0.7,
+            cos_refine: 0.97,
+            depth_factor: 0.95,
+            cos_simplify: 0.999995,
+            cos_collision_guard: 0.97,
+            max_depth: 3,
+            merge_delay_s: 0.1,
+            project_colliding_midpoints: true,
+            interval_s: 0.0,
+        }
+    }
+}
+
+/// Parameters of the sizing-field remesher.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizingRemeshing {
+    pub limits: SizeLimits,
+    pub terms: SizingTerms,
+    /// Faces whose centroid is within this distance of an object ask for `proximity_size_m` edges, m.
+    pub proximity_distance_m: f64,
+    pub proximity_size_m: f64,
+    /// Time between passes, s (one frame at 60 Hz by default).
+    pub interval_s: f64,
+}
+
+impl SizingRemeshing {
+    /// Defaults for the thesis's 1 m cloths: edges between `min_edge` and 25 cm, dihedral angle per edge
+    /// 0.3 rad, velocity jump per edge 0.5 m/s, compression as Oliveira's 70 %, and the fine grid's
+    /// 6.25 cm near objects.
+    pub fn for_cloth(min_edge: f64) -> Self {
+        Self {
+            limits: SizeLimits { min_edge_length: min_edge, max_edge_length: 0.25, min_aspect: 0.2 },
+            terms: SizingTerms { refine_angle: 0.3, refine_velocity: 0.5, refine_compression: 0.3 },
+            proximity_distance_m: 0.02,
+            proximity_size_m: 0.0625,
+            interval_s: 1.0 / 60.0,
+        }
+    }
+}
+
+/// Which remesher drives the cloth.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AdaptiveMethod {
+    /// No remeshing (the static reference runs, A-43).
+    Static,
+    Oliveira(OliveiraRemeshing),
+    Subdivision(SubdivisionRemeshing),
+    SizingField(SizingRemeshing),
+}
+
+/// What the remesher has done so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RemeshStats {
+    /// Passes run, and passes that changed the mesh.
+    pub passes: u64,
+    pub rebuilds: u64,
+    /// Oliveira: components remeshed by refinement and by simplification; 1-to-4: splits and merges;
+    /// sizing field: splits and collapses.
+    pub refinements: u64,
+    pub simplifications: u64,
+    /// Oliveira: simplifications undone because they did not lower the face count.
+    pub simplifications_undone: u64,
+    /// Components whose remeshing was refused (pinched border, locked vertex inside, mesher failure).
+    pub failures: u64,
+    /// New particles found inside an object and pushed out.
+    pub pushed_out: u64,
+    /// Wall time spent in remeshing passes and rebuilds, s.
+    pub wall_s: f64,
+}
+
+#[derive(Debug)]
+enum Engine {
+    Static,
+    Oliveira {
+        mesh: AdaptiveMesh,
+        params: OliveiraRemeshing,
+        refined_at: BTreeMap<(u32, u32), f64>,
+    },
+    Subdivision {
+        sub: Subdivision,
+        x: Vec<DVec3>,
+        v: Vec<DVec3>,
+        splits: BTreeMap<u32, Split>,
+        tracked_slot: u32,
+        params: SubdivisionRemeshing,
+    },
+    Sizing {
+        mesh: AdaptiveMesh,
+        params: SizingRemeshing,
+    },
+}
+
+/// A split of the 1-to-4 hierarchy: when, the edge's ends and its midpoint.
+#[derive(Debug, Clone, Copy)]
+struct Split {
+    t: f64,
+    ends: [u32; 2],
+    mid: u32,
+}
+
+/// An Oliveira cloth with a remesher.
+#[derive(Debug)]
+pub struct AdaptiveCloth {
+    cloth: OliveiraCloth,
+    engine: Engine,
+    gravity: DVec3,
+    interval: f64,
+    next_remesh: f64,
+    stats: RemeshStats,
+}
+
+impl AdaptiveCloth {
+    /// Wraps a freshly built cloth; `gravity` is the scene's (the model needs it for new particles).
+    pub fn new(cloth: OliveiraCloth, gravity: DVec3, method: AdaptiveMethod) -> Self {
+        let adaptive_mesh = |c: &OliveiraCloth| {
+            let mut m =
+                AdaptiveMesh::from_material(c.mesh(), c.positions().to_vec(), c.velocities().to_vec());
+            m.set_locked(c.tracked_vertex() as u32, true);
+            m
+        };
+        let (engine, interval) = match method {
+            AdaptiveMethod::Static => (Engine::Static, f64::INFINITY),
+            AdaptiveMethod::Oliveira(params) => (
+                Engine::Oliveira { mesh: adaptive_mesh(&cloth), params, refined_at: BTreeMap::new() },
+                params.interval_s,
+            ),
+            AdaptiveMethod::Subdivision(params) => (
+                Engine::Subdivision {
+                    sub: Subdivision::new(cloth.mesh(), params.max_depth),
+                    x: cloth.positions().to_vec(),
+                    v: cloth.velocities().to_vec(),
+                    splits: BTreeMap::new(),
+                    tracked_slot: cloth.tracked_vertex() as u32,
+                    params,
+                },
+                params.interval_s,
+            ),
+            AdaptiveMethod::SizingField(params) => {
+                (Engine::Sizing { mesh: adaptive_mesh(&cloth), params }, params.interval_s)
+            }
+        };
+        Self { cloth, engine, gravity, interval, next_remesh: 0.0, stats: RemeshStats::default() }
+    }
+
+    /// One step of the cloth, then a remeshing pass when one is due.
+    pub fn step(&mut self) -> Result<StepReport, StepError> {
+        let report = self.cloth.step()?;
+        let t = self.cloth.time();
+        if self.interval.is_finite() && t >= self.next_remesh {
+            self.remesh();
+            self.next_remesh =
+                if self.interval > 0.0 { ((t / self.interval).floor() + 1.0) * self.interval } else { t };
+        }
+        Ok(report)
+    }
+
+    pub fn run_until(&mut self, t_end: f64) -> Result<(), StepError> {
+        while self.cloth.time() < t_end {
+            self.step()?;
+        }
+        Ok(())
+    }
+
+    pub fn cloth(&self) -> &OliveiraCloth {
+        &self.cloth
+    }
+
+    /// The cloth, e.g. to set its state in a test through a rebuild.
+    #[cfg(test)]
+    pub(crate) fn cloth_mut(&mut self) -> &mut OliveiraCloth {
+        &mut self.cloth
+    }
+
+    pub fn stats(&self) -> RemeshStats {
+        self.stats
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.cloth.masses().iter().sum()
+    }
+
+    /// The remesher's own mesh (Oliveira and sizing field), for checks.
+    pub fn adaptive_mesh(&self) -> Option<&AdaptiveMesh> {
+        match &self.engine {
+            Engine::Oliveira { mesh, .. } | Engine::Sizing { mesh, .. } => Some(mesh),
+            _ => None,
+        }
+    }
+
+    /// Runs one remeshing pass now; returns whether the mesh changed.
+    pub fn remesh(&mut self) -> bool {
+        let start = Instant::now();
+        self.stats.passes += 1;
+        let changed = match &mut self.engine {
+            Engine::Static => false,
+            Engine::Oliveira { mesh, params, refined_at } => {
+                oliveira_pass(&mut self.cloth, mesh, params, refined_at, self.gravity, &mut self.stats)
+            }
+            Engine::Subdivision { sub, x, v, splits, tracked_slot, params } => subdivision_pass(
+                &mut self.cloth,
+                sub,
+                (x, v),
+                splits,
+                *tracked_slot,
+                params,
+                self.gravity,
+                &mut self.stats,
+            ),
+            Engine::Sizing { mesh, params } => {
+                sizing_pass(&mut self.cloth, mesh, params, self.gravity, &mut self.stats)
+            }
+        };
+        if changed {
+            self.stats.rebuilds += 1;
+        }
+        self.stats.wall_s += start.elapsed().as_secs_f64();
+        changed
+    }
+}
+
+/// Copies the cloth's state into a compacted adaptive mesh (same numbering).
+fn sync(mesh: &mut AdaptiveMesh, cloth: &OliveiraCloth) {
+    mesh.positions_mut().copy_from_slice(cloth.positions());
+    mesh.velocities_mut().copy_from_slice(cloth.velocities());
+}
+
+/// Type-3 test on the particles `new` of a rebuilt state: any inside an object is moved to just
+/// outside the nearest surface point and loses its velocity into the surface. (The cloth's
+/// `contact::push_out`, which turns the particle's vertex normal against its motion, was measured to throw
+/// particles inserted on chords under a draped cloth far out of place, so the adaptive drivers use the
+/// nearest-point rule.)
+fn push_out_new(cloth: &OliveiraCloth, x: &mut [DVec3], v: &mut [DVec3], new: &[u32]) -> u64 {
+    let mut count = 0;
+    for &i in new {
+        let i = i as usize;
+        for o in cloth.colliders() {
+            if o.solid.contains(x[i]) {
+                let prox = o.solid.proximity(x[i]);
+                let n = (prox.point - x[i]).normalize_or_zero();
+                x[i] = prox.point + n * 1e-6;
+                let vn = v[i].dot(n);
+                if vn < 0.0 {
+                    v[i] -= n * vn;
+                }
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+/// Compacts a changed adaptive mesh, remaps edge stamps, pushes out new particles and rebuilds the cloth.
+fn rebuild_from_adaptive(
+    cloth: &mut OliveiraCloth,
+    mesh: &mut AdaptiveMesh,
+    refined_at: Option<&mut BTreeMap<(u32, u32), f64>>,
+    gravity: DVec3,
+    stats: &mut RemeshStats,
+) -> bool {
+    let log = mesh.take_log();
+    if log.is_empty() {
+        return false;
+    }
+    let renum = mesh.compact();
+    if let Some(stamps) = refined_at {
+        let old = std::mem::take(stamps);
+        for ((a, b), t) in old {
+            let (na, nb) = (renum.vertex[a as usize], renum.vertex[b as usize]);
+            if na != NONE && nb != NONE && mesh.find_half_edge(na, nb).is_some() {
+                stamps.insert((na.min(nb), na.max(nb)), t);
+            }
+        }
+    }
+    let new: Vec<u32> =
+        log.new_vertices.iter().map(|nv| renum.vertex[nv.vertex as usize]).filter(|&i| i != NONE).collect();
+    let tracked = renum.vertex[cloth.tracked_vertex()];
+    assert!(tracked != NONE, "particle P is locked and cannot be removed");
+    let triangles = mesh.triangles();
+    let material = MaterialMesh::new(mesh.rest().to_vec(), triangles.clone())
+        .expect("a remeshed adaptive mesh is a valid material mesh");
+    let mut x = mesh.positions().to_vec();
+    let mut v = mesh.velocities().to_vec();
+    stats.pushed_out += push_out_new(cloth, &mut x, &mut v, &new);
+    mesh.positions_mut().copy_from_slice(&x);
+    mesh.velocities_mut().copy_from_slice(&v);
+    cloth.replace_mesh(material, x, v, tracked as usize, gravity);
+    true
+}
+
+/// One pass of the thesis's remesher (Fig. 4.7, spec §3.2 and §6.8).
+fn oliveira_pass(
+    cloth: &mut OliveiraCloth,
+    mesh: &mut AdaptiveMesh,
+    p: &OliveiraRemeshing,
+    refined_at: &mut BTreeMap<(u32, u32), f64>,
+    gravity: DVec3,
+    stats: &mut RemeshStats,
+) -> bool {
+    sync(mesh, cloth);
+    let t = cloth.time();
+    let sel = select_edges(mesh, cloth.colliders(), refined_at, t, p);
+    if sel.refine.is_empty() && sel.simplify.is_empty() {
+        return false;
+    }
+    let refine = edge_components(mesh, &sel.refine, &[]);
+    let mut taken: Vec<u32> = refine.concat();
+    taken.sort_unstable();
+    let simplify = edge_components(mesh, &sel.simplify, &taken);
+    let _ = mesh.take_log();
+    let retry_refine =
+        RetryRule { max_tries: p.max_tries, ..RetryRule::refinement(Some(p.short_edge_limit())) };
+    for (faces, refining) in refine.iter().map(|f| (f, true)).chain(simplify.iter().map(|f| (f, false))) {
+        // The density factor of the hole's border (Eq. 4.22), scaled by the refine/simplify percentage.
+        let d0 = border_density(mesh, faces);
+        let settings = if refining {
+            RegionRemeshing {
+                density: d0 * p.density_refine,
+                retry: retry_refine,
+                contour: ContourRule::Bisect { min_length: p.min_rest_length },
+                improvement_rounds: p.improvement_rounds,
+            }
+        } else {
+            RegionRemeshing {
+                density: d0 * p.density_simplify,
+                retry: RetryRule::simplification(),
+                contour: ContourRule::MergeStraight { max_length: p.max_rest_length },
+                improvement_rounds: p.improvement_rounds,
+            }
+        };
+        let border: Vec<(u32, u32)> = mesh
+            .region_border(faces)
+            .iter()
+            .flat_map(|ring| (0..ring.len()).map(|i| (ring[i], ring[(i + 1) % ring.len()])))
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        let first_new_face = mesh.log().added_faces.len();
+        // A simplification that does not lower the face count is undone (anima's guard): a flat region
+        // would otherwise be regenerated, to the same size, after every step.
+        let before = (!refining).then(|| mesh.clone());
+        match mesh.remesh_region(faces, &settings) {
+            Ok(_) if before.as_ref().is_some_and(|b| mesh.n_faces() >= b.n_faces()) => {
+                *mesh = before.expect("kept for simplification");
+                stats.simplifications_undone += 1;
+            }
+            Ok(_) if refining => {
+                stats.refinements += 1;
+                let added = mesh.log().added_faces[first_new_face..].to_vec();
+                for k in face_edge_keys(mesh, &added) {
+                    if !border.contains(&k) {
+                        refined_at.insert(k, t);
+                    }
+                }
+            }
+            Ok(_) => stats.simplifications += 1,
+            Err(_) => stats.failures += 1,
+        }
+    }
+    rebuild_from_adaptive(cloth, mesh, Some(refined_at), gravity, stats)
+}
+
+/// One pass of the 1-to-4 baseline.
+#[expect(clippy::too_many_arguments, reason = "the hierarchy, its per-slot state and the settings")]
+fn subdivision_pass(
+    cloth: &mut OliveiraCloth,
+    sub: &mut Subdivision,
+    (x, v): (&mut Vec<DVec3>, &mut Vec<DVec3>),
+    splits: &mut BTreeMap<u32, Split>,
+    tracked_slot: u32,
+    p: &SubdivisionRemeshing,
+    gravity: DVec3,
+    stats: &mut RemeshStats,
+) -> bool {
+    // Cloth particle k is the k-th live vertex slot.
+    let mut k = 0;
+    for s in 0..sub.rest().len() {
+        if sub.is_vertex_alive(s as u32) {
+            x[s] = cloth.positions()[k];
+            v[s] = cloth.velocities()[k];
+            k += 1;
+        }
+    }
+    let t = cloth.time();
+    let n_slots_before = sub.rest().len();
+    let tris = sub.triangles();
+    let mut normals = vec![DVec3::ZERO; x.len()];
+    vertex_normals(&tris, x, &mut normals);
+    let mut edge_faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (f, tri) in tris.iter().enumerate() {
+        for i in 0..3 {
+            let (a, b) = (tri[i], tri[(i + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let face_normal = |f: usize| {
+        let [a, b, c] = tris[f].map(|i| x[i as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let colliders = cloth.colliders();
+    let mut changed = false;
+    let mut todo = Vec::new();
+    for (e, [a, b], depth) in sub.leaf_edges() {
+        if sub.can_split(e).is_err() {
+            continue;
+        }
+        let (xa, xb) = (x[a as usize], x[b as usize]);
+        let (ra, rb) = (sub.rest()[a as usize], sub.rest()[b as usize]);
+        let l0 = ra.distance(rb);
+        let compressed = xa.distance(xb) / l0 < p.compression;
+        let colliding = first_hit(colliders, xa, xb).is_some_and(|(_, n, _)| {
+            let faces = edge_faces.get(&(a.min(b), a.max(b))).map_or(&[][..], |f| f.as_slice());
+            let cloth_n: DVec3 = faces.iter().map(|&f| face_normal(f)).sum();
+            cloth_n.normalize_or_zero().dot(n).abs() < p.cos_collision_guard
+        });
+        let limit = p.cos_refine * p.depth_factor.powi(depth as i32);
+        let curved = normals[a as usize].dot(normals[b as usize]) < limit;
+        if compressed || colliding || curved {
+            todo.push((e, [a, b], colliding));
+        }
+    }
+    for (e, [a, b], colliding) in todo {
+        let Ok(m) = sub.split(e) else { continue };
+        let m = m as usize;
+        x.resize(m + 1, DVec3::ZERO);
+        v.resize(m + 1, DVec3::ZERO);
+        let mut xm = 0.5 * (x[a as usize] + x[b as usize]);
+        if colliding && p.project_colliding_midpoints {
+            // Onto the surface of the object the edge meets (Simnett's rule), just outside it.
+            if let Some((_, _, k)) = first_hit(colliders, x[a as usize], x[b as usize]) {
+                let prox = colliders[k].solid.proximity(xm);
+                let out = if prox.inside { prox.point - xm } else { xm - prox.point };
+                xm = prox.point + out.normalize_or_zero() * 1e-6;
+            }
+        }
+        x[m] = xm;
+        v[m] = 0.5 * (v[a as usize] + v[b as usize]);
+        splits.insert(e, Split { t, ends: [a, b], mid: m as u32 });
+        stats.refinements += 1;
+        changed = true;
+    }
+    // Merges: a split edge whose ends and midpoint are flat, old enough and mergeable.
+    for e in sub.mergeable_edges() {
+        let Some(s) = splits.get(&e).copied() else { continue };
+        if t - s.t < p.merge_delay_s || s.mid as usize >= normals.len() {
+            continue;
+        }
+        let n = |i: u32| normals[i as usize];
+        let flat = n(s.ends[0]).dot(n(s.ends[1])) > p.cos_simplify
+            && n(s.ends[0]).dot(n(s.mid)) > p.cos_simplify
+            && n(s.mid).dot(n(s.ends[1])) > p.cos_simplify;
+        if flat && sub.merge(e).is_ok() {
+            splits.remove(&e);
+            stats.simplifications += 1;
+            changed = true;
+        }
+    }
+    if !changed {
+        return false;
+    }
+    let material = sub.to_material_mesh().expect("1-to-4 subdivision keeps a conforming mesh");
+    let mut map = vec![NONE; sub.rest().len()];
+    let (mut xc, mut vc, mut new) = (Vec::new(), Vec::new(), Vec::new());
+    for (s, m) in map.iter_mut().enumerate() {
+        if sub.is_vertex_alive(s as u32) {
+            *m = xc.len() as u32;
+            if s >= n_slots_before {
+                new.push(*m);
+            }
+            xc.push(x[s]);
+            vc.push(v[s]);
+        }
+    }
+    stats.pushed_out += push_out_new(cloth, &mut xc, &mut vc, &new);
+    let tracked = map[tracked_slot as usize] as usize;
+    cloth.replace_mesh(material, xc, vc, tracked, gravity);
+    true
+}
+
+/// One pass of the sizing-field remesher.
+fn sizing_pass(
+    cloth: &mut OliveiraCloth,
+    mesh: &mut AdaptiveMesh,
+    p: &SizingRemeshing,
+    gravity: DVec3,
+    stats: &mut RemeshStats,
+) -> bool {
+    sync(mesh, cloth);
+    let near = Metric::isotropic(p.proximity_size_m);
+    let mut extra = vec![Metric::ZERO; mesh.n_face_slots()];
+    for f in mesh.live_faces() {
+        let c =
+            mesh.face_slots()[f as usize].iter().map(|&i| mesh.positions()[i as usize]).sum::<DVec3>() / 3.0;
+        let close = cloth.colliders().iter().any(|o| {
+            let prox = o.solid.proximity(c);
+            prox.inside || prox.distance < p.proximity_distance_m
+        });
+        if close {
+            extra[f as usize] = near;
+        }
+    }
+    let metrics = face_metrics(mesh, &p.terms, &p.limits, Some(&extra));
+    let report = remesh_to_metric(mesh, &metrics, &MetricRemeshing::new(p.limits));
+    stats.refinements += report.splits as u64;
+    stats.simplifications += report.collapses as u64;
+    rebuild_from_adaptive(cloth, mesh, None, gravity, stats)
+}
+
+/// Shortest rest edge of a mesh, m.
+pub fn min_rest_edge(mesh: &MaterialMesh) -> f64 {
+    mesh.edge_rest_lengths().into_iter().fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use anima_geom::{DVec2, DiagonalPattern};
+    use anima_ode::Integrator;
+
+    use super::super::criteria::ShortEdgeRule;
+    use super::super::material::Material;
+    use super::super::scene::{
+        Centre, ClothDesc, Height, OLIVEIRA_GRAVITY, ObjectDesc, OliveiraScene, Options, ShapeDesc, StepRule,
+    };
+    use super::*;
+
+    /// Test III (Table 5.5) on an n × n grid, with or without its sphere.
+    fn sphere_scene(n: usize, sphere: bool) -> OliveiraScene {
+        OliveiraScene {
+            duration_s: 0.6,
+            gravity_m_s2: OLIVEIRA_GRAVITY,
+            cloth: ClothDesc {
+                vertices_per_side: n,
+                size_m: 1.0,
+                diagonals: DiagonalPattern::Uniform,
+                centre: Centre::At(DVec2::ZERO),
+                height: Height::At { z_m: 0.501 },
+                tracked_vertex: (0, 0),
+            },
+            material: Material {
+                density_kg_m3: 6000.0,
+                thickness_m: 1e-4,
+                permeability: 3.0,
+                young_modulus_pa: 1e7,
+                cross_section_m2: 2.5e-6,
+                damping_ratio: 0.01,
+                bending_stiffness: 1e-3,
+                bending_damping: 1e-4,
+                friction: 0.05,
+            },
+            time_step: StepRule::Provot { beta: 0.001, startup_dt_s: Some(1e-4) },
+            restitution: 0.5,
+            objects: if sphere {
+                vec![ObjectDesc {
+                    name: "sphere".into(),
+                    friction: 0.05,
+                    shape: ShapeDesc::Sphere { centre_m: DVec3::new(0.0, 0.0, 0.25), radius_m: 0.25 },
+                }]
+            } else {
+                Vec::new()
+            },
+            integrator: Integrator::Rk4,
+            options: Options::thesis(),
+        }
+    }
+
+    fn adaptive(n: usize, sphere: bool, method: AdaptiveMethod) -> AdaptiveCloth {
+        let scene = sphere_scene(n, sphere);
+        AdaptiveCloth::new(OliveiraCloth::new(&scene, Vec::new()).unwrap(), scene.gravity_m_s2, method)
+    }
+
+    fn oliveira_every(interval_s: f64) -> AdaptiveMethod {
+        AdaptiveMethod::Oliveira(OliveiraRemeshing { interval_s, ..OliveiraRemeshing::test_3() })
+    }
+
+    /// Steps to `t_end`, checking after every rebuild: a valid manifold mesh (half-edge invariants,
+    /// counter-clockwise rest triangles of positive area), total mass unchanged, finite state, no
+    /// particle inside the sphere, P still the grid corner. Returns the number of rebuilds.
+    fn drape_checked(c: &mut AdaptiveCloth, t_end: f64) -> u64 {
+        let mass = c.total_mass();
+        let corner = c.cloth().mesh().rest()[c.cloth().tracked_vertex()];
+        let mut rebuilds = 0;
+        while c.cloth().time() < t_end {
+            c.step().unwrap();
+            if c.stats().rebuilds == rebuilds {
+                continue;
+            }
+            rebuilds = c.stats().rebuilds;
+            if let Some(m) = c.adaptive_mesh() {
+                m.check_invariants().unwrap();
+            }
+            let mesh = c.cloth().mesh();
+            for f in 0..mesh.n_faces() {
+                assert!(mesh.rest_area(f) > 0.0, "face {f} has rest area {}", mesh.rest_area(f));
+            }
+            let rel = (c.total_mass() - mass).abs() / mass;
+            assert!(rel < 1e-12, "mass changed by {rel:e} relative at t = {}", c.cloth().time());
+            assert!(c.cloth().positions().iter().all(|p| p.is_finite()));
+            assert!(c.cloth().penetrations().is_empty(), "{:?}", c.cloth().penetrations());
+            assert_eq!(mesh.rest()[c.cloth().tracked_vertex()], corner, "P moved in material space");
+        }
+        rebuilds
+    }
+
+    #[test]
+    fn flat_resting_sheet_coarsens() {
+        let mut c = adaptive(9, false, oliveira_every(0.0));
+        let (faces, mass) = (c.cloth().mesh().n_faces(), c.total_mass());
+        assert!(c.remesh());
+        let after = c.cloth().mesh().n_faces();
+        assert!(after < faces, "{after} faces from {faces}");
+        assert!(c.stats().simplifications > 0 && c.stats().refinements == 0, "{:?}", c.stats());
+        assert!((c.total_mass() - mass).abs() < 1e-12 * mass);
+        c.adaptive_mesh().unwrap().check_invariants().unwrap();
+    }
+
+    /// Folds the cloth's current mesh 90° about the line X = 0.5.
+    fn fold(c: &mut AdaptiveCloth) {
+        let mesh = c.cloth().mesh().clone();
+        let x: Vec<DVec3> = mesh
+            .rest()
+            .iter()
+            .map(|r| {
+                let u = r.x - 0.5;
+                if u <= 0.0 { DVec3::new(u, r.y, 1.0) } else { DVec3::new(0.0, r.y, 1.0 - u) }
+            })
+            .collect();
+        let v = vec![DVec3::ZERO; x.len()];
+        let tracked = c.cloth().tracked_vertex();
+        c.cloth_mut().replace_mesh(mesh, x, v, tracked, OLIVEIRA_GRAVITY);
+    }
+
+    #[test]
+    fn sharply_bent_sheet_refines() {
+        let methods = [
+            oliveira_every(0.0),
+            AdaptiveMethod::Subdivision(SubdivisionRemeshing::test_3()),
+            AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.02)),
+        ];
+        for method in methods {
+            let mut c = adaptive(5, false, method);
+            fold(&mut c);
+            let faces = c.cloth().mesh().n_faces();
+            let (mass, k_max) = (c.total_mass(), c.cloth().max_stiffness());
+            assert!(c.remesh(), "{method:?}");
+            let after = c.cloth().mesh().n_faces();
+            assert!(after > faces, "{method:?}: {after} faces from {faces}");
+            assert!((c.total_mass() - mass).abs() < 1e-12 * mass);
+            // The fold line X = 0.5 is where the new edges are: the shortest rest edge is there.
+            let m = c.cloth().mesh();
+            assert!(c.cloth().max_stiffness() > k_max, "{method:?}: k_max follows the new springs");
+            assert!(min_rest_edge(m) < 0.25, "{method:?}");
+        }
+    }
+
+    #[test]
+    fn refinement_respects_the_rest_length_guard() {
+        // Repeated folding passes: no edge with L⁰ < L⁰_min is refined, and with the `MinLength` rule no
+        // patch keeps an edge shorter than L⁰_min (contour bisection of an edge ≥ L⁰_min gives ≥ L⁰_min/2).
+        let p = OliveiraRemeshing {
+            short_edge: ShortEdgeRule::MinLength,
+            simplify: false,
+            ..OliveiraRemeshing::test_3()
+        };
+        let mut c = adaptive(5, false, AdaptiveMethod::Oliveira(p));
+        for _ in 0..6 {
+            fold(&mut c);
+            c.remesh();
+        }
+        let shortest = min_rest_edge(c.cloth().mesh());
+        assert!(c.stats().refinements > 0);
+        assert!(shortest >= 0.5 * p.min_rest_length - 1e-12, "shortest rest edge {shortest}");
+        c.adaptive_mesh().unwrap().check_invariants().unwrap();
+    }
+
+    #[test]
+    fn oliveira_drape_keeps_every_invariant() {
+        let mut c = adaptive(5, true, oliveira_every(0.0));
+        let rebuilds = drape_checked(&mut c, 0.2);
+        assert!(rebuilds > 0 && c.cloth().mesh().n_faces() > 32, "{:?}", c.stats());
+    }
+
+    #[test]
+    fn subdivision_drape_keeps_every_invariant() {
+        // 1-to-4 refines late (spec §7.3): nothing is curved enough before about 0.1 s.
+        let mut c = adaptive(5, true, AdaptiveMethod::Subdivision(SubdivisionRemeshing::test_3()));
+        let rebuilds = drape_checked(&mut c, 0.2);
+        assert!(rebuilds > 0, "{:?}", c.stats());
+    }
+
+    #[test]
+    fn sizing_field_drape_keeps_every_invariant() {
+        let mut c = adaptive(5, true, AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.03)));
+        let rebuilds = drape_checked(&mut c, 0.08);
+        assert!(rebuilds > 0, "{:?}", c.stats());
+    }
+
+    /// The sizing-field remesher with BDF2 and the sparse Cholesky at 1/240 s: the implicit system (its
+    /// pattern, the stepper's size and solver) is rebuilt after every topology change.
+    #[test]
+    fn sizing_field_drape_runs_with_an_implicit_integrator() {
+        let mut scene = sphere_scene(5, true);
+        scene.integrator = Integrator::Bdf2;
+        scene.time_step = StepRule::Fixed { dt_s: 1.0 / 240.0 };
+        scene.options.contact_velocity = super::super::ContactVelocity::EndOfStep;
+        let mut cloth = OliveiraCloth::new(&scene, Vec::new()).unwrap();
+        cloth.stepper_mut().set_linear_solver(anima_ode::LinearSolver::SparseCholesky);
+        let method = AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.03));
+        let mut c = AdaptiveCloth::new(cloth, scene.gravity_m_s2, method);
+        let rebuilds = drape_checked(&mut c, 0.3);
+        assert!(rebuilds > 0, "{:?}", c.stats());
+        assert_eq!(c.cloth().steps(), 72);
+    }
+
+    #[test]
+    fn adaptive_drapes_are_deterministic() {
+        let methods = [
+            oliveira_every(0.0),
+            AdaptiveMethod::Subdivision(SubdivisionRemeshing::test_3()),
+            AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.03)),
+        ];
+        for method in methods {
+            let run = || {
+                let mut c = adaptive(5, true, method);
+                c.run_until(0.05).unwrap();
+                c
+            };
+            let (a, b) = (run(), run());
+            assert_eq!(a.cloth().triangles(), b.cloth().triangles(), "{method:?}");
+            assert_eq!(a.cloth().mesh().rest(), b.cloth().mesh().rest(), "{method:?}");
+            let bits = |c: &AdaptiveCloth| {
+                c.cloth().positions().iter().map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&a), bits(&b), "{method:?}");
+        }
+    }
+}
