@@ -28,7 +28,7 @@ enum Command {
     /// Oliveira 2013's drapes on static meshes: oliveira-1, oliveira-2, oliveira-3, or oliveira (all three,
     /// which also writes docs/reproduction/oliveira-results.md); oliveira-implicit: the fine drapes with
     /// implicit integrators against a converged reference (docs/reproduction/oliveira-implicit.md).
-    /// Nunes 2006's controllers: nunes-walk, nunes-throw, or nunes (all, which also writes
+    /// Nunes 2006's controllers: nunes-walk, nunes-throw, nunes-flip, or nunes (all, which also writes
     /// docs/reproduction/nunes-results.md).
     Reproduce {
         experiment: String,

@@ -108,3 +108,14 @@ fn the_thrower_releases_the_ball_when_t2_fires() {
     }
     assert_eq!(ch.env.released_at, Some(99));
 }
+
+#[test]
+fn the_optimised_thrower_puts_the_ball_through_the_hoop() {
+    let c = nunes::parse(nunes::THROW_OPTIMISED_RON).unwrap();
+    let out = nunes::throw(c, &nunes::BASKET, 2000, |_| ()).unwrap();
+    assert!(out.scored && !out.fell, "{out:?}");
+    let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
+    // Better than the unoptimised throw under the capped fitness it was optimised for.
+    let before = nunes::throw(nunes::parse(nunes::THROW_RON).unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
+    assert!(out.fitness_capped(cap) > before.fitness_capped(cap) + 2.0, "{out:?} {before:?}");
+}
