@@ -75,6 +75,9 @@ pub struct OliveiraCloth {
     steps: u64,
     first_collision: Option<f64>,
     total_hits: u64,
+    /// Edges cast at the end of every step and answered on both ends: the adaptive remesher
+    /// sets them to the edges it may no longer refine. Empty for a static mesh.
+    repelled_edges: Vec<[u32; 2]>,
 }
 
 fn field(field: &'static str, message: impl Into<String>) -> BuildError {
@@ -283,6 +286,7 @@ impl OliveiraCloth {
             steps: 0,
             first_collision: None,
             total_hits: 0,
+            repelled_edges: Vec::new(),
             mesh,
             model,
         })
@@ -318,6 +322,9 @@ impl OliveiraCloth {
             hits = pass.particles(&self.now, &mut self.next, &mut self.clearance, &mut self.responded);
             if self.options.edge_contacts {
                 let ends = &self.model.springs.ends;
+                hits += pass.edges(ends, &self.now, &mut self.next, &mut self.clearance, &mut self.responded);
+            } else if !self.repelled_edges.is_empty() {
+                let ends = &self.repelled_edges;
                 hits += pass.edges(ends, &self.now, &mut self.next, &mut self.clearance, &mut self.responded);
             }
         }
@@ -529,7 +536,16 @@ impl OliveiraCloth {
         self.clearance = vec![0.0; n];
         self.responded = vec![false; n];
         self.tracked = tracked;
+        self.repelled_edges.clear();
         self.mesh = mesh;
+    }
+
+    /// Edges to cast at the end of every step, their ends answered as particle hits (A-24: the thesis's
+    /// repulsion on colliding edges that remeshing may no longer refine). Cleared by a remesh; ignored
+    /// while `Options::edge_contacts` casts every edge.
+    pub(crate) fn set_repelled_edges(&mut self, ends: impl IntoIterator<Item = [u32; 2]>) {
+        self.repelled_edges.clear();
+        self.repelled_edges.extend(ends);
     }
 }
 

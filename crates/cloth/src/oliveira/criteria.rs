@@ -78,6 +78,10 @@ pub struct OliveiraRemeshing {
     pub simplify: bool,
     /// Time between remeshing passes, s; 0 remeshes after every step as the thesis does (Fig. 4.1).
     pub interval_s: f64,
+    /// cast every edge that may no longer be refined (L⁰ < L⁰_min) at the end of each step and
+    /// answer a hit on both its ends as particle hits, as the thesis does to reduce visible
+    /// intersections. On by default.
+    pub repel_unrefinable_edges: bool,
 }
 
 impl OliveiraRemeshing {
@@ -99,6 +103,7 @@ impl OliveiraRemeshing {
             improvement_rounds: 3,
             simplify: true,
             interval_s: 0.0,
+            repel_unrefinable_edges: true,
         }
     }
 
@@ -120,6 +125,11 @@ impl OliveiraRemeshing {
     /// A⁰_max = (√3/4)(L⁰_max)².
     pub fn max_rest_area(&self) -> f64 {
         3f64.sqrt() / 4.0 * self.max_rest_length * self.max_rest_length
+    }
+
+    /// Whether an edge of rest length `l0` may still be refined.
+    pub fn can_refine(&self, l0: f64) -> bool {
+        l0 >= self.min_rest_length
     }
 
     /// The patch edge length below which a refinement patch is regenerated.
@@ -218,7 +228,7 @@ pub fn select_edges(
     let mut out = Selection::default();
     for (i, e) in edges.iter().enumerate() {
         let l0 = rest_len(e);
-        let can_refine = l0 >= p.min_rest_length;
+        let can_refine = p.can_refine(l0);
         let can_simplify = p.simplify && l0 <= p.max_rest_length && age(e.key()) >= p.time_to_simplify;
         let (xa, xb) = (x[e.a as usize], x[e.b as usize]);
         if can_refine && xa.distance(xb) / l0 < p.compression {
