@@ -131,7 +131,9 @@ pub struct RemeshStats {
 
 #[derive(Debug)]
 enum Engine {
-    Static,
+    Static {
+        locked: Vec<usize>,
+    },
     Oliveira {
         mesh: AdaptiveMesh,
         params: OliveiraRemeshing,
@@ -143,6 +145,8 @@ enum Engine {
         v: Vec<DVec3>,
         splits: BTreeMap<u32, Split>,
         tracked_slot: u32,
+        /// Slots the caller locked: a split whose midpoint is one of them is never merged.
+        locked_slots: Vec<u32>,
         params: SubdivisionRemeshing,
     },
     Sizing {
@@ -180,7 +184,7 @@ impl AdaptiveCloth {
             m
         };
         let (engine, interval) = match method {
-            AdaptiveMethod::Static => (Engine::Static, f64::INFINITY),
+            AdaptiveMethod::Static => (Engine::Static { locked: Vec::new() }, f64::INFINITY),
             AdaptiveMethod::Oliveira(params) => (
                 Engine::Oliveira { mesh: adaptive_mesh(&cloth), params, refined_at: BTreeMap::new() },
                 params.interval_s,
@@ -192,6 +196,7 @@ impl AdaptiveCloth {
                     v: cloth.velocities().to_vec(),
                     splits: BTreeMap::new(),
                     tracked_slot: cloth.tracked_vertex() as u32,
+                    locked_slots: Vec::new(),
                     params,
                 },
                 params.interval_s,
@@ -252,12 +257,66 @@ impl AdaptiveCloth {
         }
     }
 
+    /// Locks particle `vertex` (its current index) against remeshing, e.g. a pinned or scripted
+    /// particle: no pass removes it or moves it in material space, and it follows every renumbering
+    /// ([`AdaptiveCloth::locked_vertices`]). The thesis's remesher leaves alone any hole that would
+    /// contain it, the sizing field never collapses it, and the 1-to-4 hierarchy never merges it away.
+    /// Particle P is always locked.
+    ///
+    /// # Panics
+    /// If `vertex` is not a particle of the cloth.
+    pub fn lock_vertex(&mut self, vertex: usize) {
+        let n = self.cloth.positions().len();
+        assert!(vertex < n, "particle {vertex} of {n}");
+        match &mut self.engine {
+            Engine::Static { locked } => {
+                if !locked.contains(&vertex) {
+                    locked.push(vertex);
+                }
+            }
+            Engine::Oliveira { mesh, .. } | Engine::Sizing { mesh, .. } => {
+                mesh.set_locked(vertex as u32, true)
+            }
+            Engine::Subdivision { sub, locked_slots, .. } => {
+                let slot = (0..sub.rest().len() as u32)
+                    .filter(|&s| sub.is_vertex_alive(s))
+                    .nth(vertex)
+                    .expect("cloth particle k is the k-th live slot");
+                if !locked_slots.contains(&slot) {
+                    locked_slots.push(slot);
+                }
+            }
+        }
+    }
+
+    /// The current indices of the locked particles (particle P and those given to
+    /// [`AdaptiveCloth::lock_vertex`]), ascending.
+    pub fn locked_vertices(&self) -> Vec<usize> {
+        let tracked = self.cloth.tracked_vertex();
+        let mut out = match &self.engine {
+            Engine::Static { locked } => locked.clone(),
+            Engine::Oliveira { mesh, .. } | Engine::Sizing { mesh, .. } => {
+                (0..mesh.n_vertices()).filter(|&v| mesh.is_locked(v as u32)).collect()
+            }
+            Engine::Subdivision { sub, locked_slots, .. } => (0..sub.rest().len() as u32)
+                .filter(|&s| sub.is_vertex_alive(s))
+                .enumerate()
+                .filter(|(_, s)| locked_slots.contains(s))
+                .map(|(k, _)| k)
+                .collect(),
+        };
+        out.push(tracked);
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
     /// Runs one remeshing pass now; returns whether the mesh changed.
     pub fn remesh(&mut self) -> bool {
         let start = Instant::now();
         self.stats.passes += 1;
         let changed = match &mut self.engine {
-            Engine::Static => false,
+            Engine::Static { .. } => false,
             Engine::Oliveira { mesh, params, refined_at } => {
                 let changed =
                     oliveira_pass(&mut self.cloth, mesh, params, refined_at, self.gravity, &mut self.stats);
@@ -266,16 +325,18 @@ impl AdaptiveCloth {
                 }
                 changed
             }
-            Engine::Subdivision { sub, x, v, splits, tracked_slot, params } => subdivision_pass(
-                &mut self.cloth,
-                sub,
-                (x, v),
-                splits,
-                *tracked_slot,
-                params,
-                self.gravity,
-                &mut self.stats,
-            ),
+            Engine::Subdivision { sub, x, v, splits, tracked_slot, locked_slots, params } => {
+                subdivision_pass(
+                    &mut self.cloth,
+                    sub,
+                    (x, v),
+                    splits,
+                    (*tracked_slot, locked_slots),
+                    params,
+                    self.gravity,
+                    &mut self.stats,
+                )
+            }
             Engine::Sizing { mesh, params } => {
                 sizing_pass(&mut self.cloth, mesh, params, self.gravity, &mut self.stats)
             }
@@ -294,7 +355,13 @@ fn repel_unrefinable_edges(cloth: &mut OliveiraCloth, p: &OliveiraRemeshing) {
     let mesh = cloth.mesh();
     let ends: Vec<[u32; 2]> = if p.repel_unrefinable_edges {
         let rest = mesh.edge_rest_lengths();
-        mesh.topology().edges().iter().zip(rest).filter(|(_, l0)| !p.can_refine(*l0)).map(|(e, _)| e.vertices).collect()
+        mesh.topology()
+            .edges()
+            .iter()
+            .zip(rest)
+            .filter(|(_, l0)| !p.can_refine(*l0))
+            .map(|(e, _)| e.vertices)
+            .collect()
     } else {
         Vec::new()
     };
@@ -448,7 +515,7 @@ fn subdivision_pass(
     sub: &mut Subdivision,
     (x, v): (&mut Vec<DVec3>, &mut Vec<DVec3>),
     splits: &mut BTreeMap<u32, Split>,
-    tracked_slot: u32,
+    (tracked_slot, locked_slots): (u32, &[u32]),
     p: &SubdivisionRemeshing,
     gravity: DVec3,
     stats: &mut RemeshStats,
@@ -523,7 +590,7 @@ fn subdivision_pass(
     // Merges: a split edge whose ends and midpoint are flat, old enough and mergeable.
     for e in sub.mergeable_edges() {
         let Some(s) = splits.get(&e).copied() else { continue };
-        if t - s.t < p.merge_delay_s || s.mid as usize >= normals.len() {
+        if t - s.t < p.merge_delay_s || s.mid as usize >= normals.len() || locked_slots.contains(&s.mid) {
             continue;
         }
         let n = |i: u32| normals[i as usize];
@@ -792,6 +859,40 @@ mod tests {
         let (hits_on, deep_on) = run(true);
         assert!(hits_on > hits_off, "answered contacts: {hits_on} with A-24, {hits_off} without");
         assert!(deep_on < deep_off, "deepest edge midpoint: {deep_on} m with A-24, {deep_off} m without");
+    }
+
+    #[test]
+    fn locked_particles_survive_every_remesher() {
+        // The sheet's centre particle (over the sphere's top, where all three remeshers work) is locked:
+        // it keeps its material point through every pass and follows the renumbering. Unlocked, the
+        // thesis's remesher regenerates the hole around it and the point is gone.
+        let centre_rest = |c: &AdaptiveCloth| c.cloth().mesh().rest()[40];
+        let methods = [
+            oliveira_every(0.0),
+            AdaptiveMethod::Subdivision(SubdivisionRemeshing::test_3()),
+            AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.02)),
+        ];
+        for method in methods {
+            let mut c = adaptive(9, true, method);
+            let (corner, centre) = (c.cloth().mesh().rest()[c.cloth().tracked_vertex()], centre_rest(&c));
+            c.lock_vertex(40);
+            while c.cloth().time() < 0.1 {
+                c.step().unwrap();
+                let rest = c.cloth().mesh().rest();
+                let locked: Vec<DVec2> = c.locked_vertices().iter().map(|&i| rest[i]).collect();
+                assert_eq!(locked.len(), 2, "{method:?} at t = {}", c.cloth().time());
+                assert!(locked.contains(&corner) && locked.contains(&centre), "{method:?}: {locked:?}");
+            }
+            assert!(c.stats().rebuilds > 0, "{method:?}: {:?}", c.stats());
+        }
+        let mut free = adaptive(9, true, oliveira_every(0.0));
+        let centre = centre_rest(&free);
+        let mut gone = false;
+        while free.cloth().time() < 0.1 && !gone {
+            free.step().unwrap();
+            gone = !free.cloth().mesh().rest().contains(&centre);
+        }
+        assert!(gone, "the unlocked centre was never remeshed away: the test would not see a lock fail");
     }
 
     #[test]
