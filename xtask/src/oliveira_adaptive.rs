@@ -26,8 +26,9 @@ struct Test {
     title: &'static str,
     /// The thesis's snapshot times, s.
     snapshots: [f64; 4],
-    /// Simulated time of our runs, s (see `DURATION_NOTE`).
-    duration: f64,
+    /// Simulated time of the shortened runs (`ANIMA_ADAPTIVE_SHORT=1`), s; the full runs simulate the
+    /// thesis's last snapshot time.
+    short: f64,
     table: &'static str,
     thesis: &'static [(&'static str, f64, u64, f64)],
     remeshing: fn() -> OliveiraRemeshing,
@@ -39,7 +40,7 @@ const TESTS: [Test; 3] = [
         slug: "bunny",
         title: "Test I — cloth on the Stanford Bunny",
         snapshots: [0.1, 0.25, 0.35, 0.5],
-        duration: 0.2,
+        short: 0.2,
         table: "Table 5.2",
         thesis: &[
             ("coarse 5 × 5", 24.8, 2236, 0.01109),
@@ -53,7 +54,7 @@ const TESTS: [Test; 3] = [
         slug: "table",
         title: "Test II — tablecloth on a round table",
         snapshots: [0.15, 0.5, 0.75, 1.0],
-        duration: 0.2,
+        short: 0.2,
         table: "Table 5.4",
         thesis: &[
             ("coarse 5 × 5", 14.3, 4391, 0.00326),
@@ -67,7 +68,7 @@ const TESTS: [Test; 3] = [
         slug: "sphere",
         title: "Test III — cloth on a sphere",
         snapshots: [0.15, 0.3, 0.45, 0.6],
-        duration: 0.3,
+        short: 0.3,
         table: "Table 5.6",
         thesis: &[("1-to-4 subdivision", 20086.4, 122509, 0.16395), ("remeshing", 21204.5, 269071, 0.07880)],
         remeshing: OliveiraRemeshing::test_3,
@@ -79,7 +80,10 @@ const TESTS: [Test; 3] = [
 enum Kind {
     /// A uniform n × n mesh; β from the scene file when `None`.
     Uniform(usize, Option<f64>),
+    /// The thesis's remesher with the `MinLength` short-edge rule.
     Oliveira,
+    /// The thesis's remesher with the spec's literal (L⁰_min)² short-edge rule.
+    OliveiraLiteral,
     OneToFour,
     Sizing,
 }
@@ -91,11 +95,12 @@ const BETA_ADAPTIVE: f64 = 0.001;
 /// after every step; see the report).
 const REMESH_INTERVAL_S: f64 = 1.0e-3;
 
-const KINDS: [(Kind, &str); 7] = [
+const KINDS: [(Kind, &str); 8] = [
     (Kind::Uniform(5, None), "uniform 5 × 5 (coarse)"),
     (Kind::Uniform(9, Some(BETA_ADAPTIVE)), "uniform 9 × 9"),
     (Kind::Uniform(13, Some(BETA_ADAPTIVE)), "uniform 13 × 13"),
     (Kind::Oliveira, "adaptive: Oliveira remeshing"),
+    (Kind::OliveiraLiteral, "adaptive: Oliveira remeshing, literal (L⁰_min)² rule"),
     (Kind::OneToFour, "adaptive: 1-to-4 subdivision"),
     (Kind::Sizing, "adaptive: sizing field"),
     (Kind::Uniform(17, None), "uniform 17 × 17 (fine, reference)"),
@@ -103,6 +108,10 @@ const KINDS: [(Kind, &str); 7] = [
 
 /// The fixed step of the backward-Euler runs, s: one step for every mesh, so that only the mesh differs.
 const IMPLICIT_DT_S: f64 = 1.0 / 4000.0;
+
+/// A run whose wall time passes this is stopped where it is (the literal short-edge rule can take Δt
+/// down to 10⁻⁷ s) and reported as stopped.
+const RUN_WALL_CAP_S: f64 = 240.0;
 
 /// Each backward-Euler run is repeated this many times and the fastest wall time kept.
 const IMPLICIT_REPEATS: usize = 5;
@@ -149,8 +158,17 @@ struct Run {
     frames: Vec<(f64, Vec<DVec3>, Vec<[u32; 3]>)>,
     min_edge: f64,
     penetrations: usize,
+    /// Where the run was stopped by `RUN_WALL_CAP_S`, s.
+    stopped_at: Option<f64>,
     /// The objects as triangle meshes, and whether each is unbounded (a floor).
     objects: Vec<(TriangleMesh, bool)>,
+}
+
+impl Test {
+    /// Simulated time, s: the thesis's full duration, or `short` with `ANIMA_ADAPTIVE_SHORT=1`.
+    fn duration(&self) -> f64 {
+        if std::env::var("ANIMA_ADAPTIVE_SHORT").is_ok_and(|v| v == "1") { self.short } else { self.snapshots[3] }
+    }
 }
 
 fn scene_path(test: &Test, n: usize) -> std::path::PathBuf {
@@ -160,8 +178,8 @@ fn scene_path(test: &Test, n: usize) -> std::path::PathBuf {
 /// The evaluation (and picture) times: the thesis's snapshot times that fall within our duration, or
 /// four evenly spaced times when none beyond the first does.
 fn eval_times(test: &Test) -> Vec<f64> {
-    let inside: Vec<f64> = test.snapshots.iter().copied().filter(|&t| t <= test.duration + 1e-9).collect();
-    if inside.len() >= 3 { inside } else { (1..=4).map(|k| test.duration * k as f64 / 4.0).collect() }
+    let inside: Vec<f64> = test.snapshots.iter().copied().filter(|&t| t <= test.duration() + 1e-9).collect();
+    if inside.len() >= 3 { inside } else { (1..=4).map(|k| test.duration() * k as f64 / 4.0).collect() }
 }
 
 /// `implicit`: backward Euler at this fixed step, s, instead of RK4 at the thesis's step rule.
@@ -193,6 +211,11 @@ fn build(test: &Test, kind: Kind, implicit: Option<f64>) -> Result<AdaptiveCloth
         Kind::Oliveira => AdaptiveMethod::Oliveira(OliveiraRemeshing {
             interval_s: REMESH_INTERVAL_S,
             short_edge: ShortEdgeRule::MinLength,
+            ..(test.remeshing)()
+        }),
+        Kind::OliveiraLiteral => AdaptiveMethod::Oliveira(OliveiraRemeshing {
+            interval_s: REMESH_INTERVAL_S,
+            short_edge: ShortEdgeRule::LiteralSquare,
             ..(test.remeshing)()
         }),
         Kind::OneToFour => AdaptiveMethod::Subdivision(SubdivisionRemeshing {
@@ -230,10 +253,12 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
     let mut frames = Vec::new();
     let mut next = 0;
     let mut last_t = 0.0;
-    let every = test.duration / 1500.0;
+    let duration = test.duration();
+    let every = duration / 1500.0;
     let start = Instant::now();
     let mut last_report = Instant::now();
-    while c.cloth().time() < test.duration {
+    let mut stopped_at = None;
+    while c.cloth().time() < duration {
         let r = c.step().with_context(|| format!("{} {label}", test.title))?;
         let t = c.cloth().time();
         if t - last_t >= every {
@@ -249,6 +274,11 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
             points.push(pts);
             frames.push((t, cl.positions().to_vec(), cl.triangles().to_vec()));
             next += 1;
+        }
+        if start.elapsed().as_secs_f64() > RUN_WALL_CAP_S {
+            stopped_at = Some(t);
+            eprintln!("xtask:   {label}: stopped at t = {t:.4} s after {RUN_WALL_CAP_S} s of wall time");
+            break;
         }
         if last_report.elapsed().as_secs_f64() > 10.0 {
             eprintln!(
@@ -273,6 +303,7 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
         frames,
         min_edge: anima_cloth::oliveira::adaptive::min_rest_edge(cloth.mesh()),
         penetrations: cloth.penetrations().len(),
+        stopped_at,
         objects: object_meshes(cloth),
     })
 }
@@ -398,7 +429,7 @@ are never stamped, §6.7) a flat region would otherwise be regenerated at the sa
 fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     let mut s = String::new();
     writeln!(s, "## {}\n", test.title)?;
-    writeln!(s, "Simulated {} s (thesis: {} s).\n", test.duration, test.snapshots[3])?;
+    writeln!(s, "Simulated {} s (thesis: {} s).\n", test.duration(), test.snapshots[3])?;
     writeln!(
         s,
         "{} beside ours (thesis: 2013 Core 2 Quad, full duration; a \"frame\" is one step).\n",
@@ -416,11 +447,20 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     for r in runs {
         let last = r.samples.last().expect("samples");
         let err = reference.map_or(f64::NAN, |f| rms(&r.points, &f.points));
+        let wall = match r.stopped_at {
+            Some(t) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
+            None => format!("{:.2}", r.wall_s),
+        };
+        let err = match r.stopped_at {
+            Some(_) if r.points.is_empty() => "—".to_string(),
+            Some(_) => format!("{err:.4} (to the stop)"),
+            None => format!("{err:.4}"),
+        };
         writeln!(
             s,
-            "| **anima**, {} | {:.2} | {} | {:.3e} | {} / {} / {} | {:.4} | {:.3e} | {:.4} |",
+            "| **anima**, {} | {} | {} | {:.3e} | {} / {} / {} | {:.4} | {:.3e} | {} |",
             r.label,
-            r.wall_s,
+            wall,
             r.steps,
             r.wall_s / r.steps.max(1) as f64,
             last.nv,
@@ -459,7 +499,8 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
         let err = |r: &Run| rms(&r.points, &f.points);
         let uniform: Vec<&Run> =
             runs.iter().filter(|r| r.label.starts_with("uniform") && !std::ptr::eq(*r, f)).collect();
-        let adaptive: Vec<&Run> = runs.iter().filter(|r| r.label.starts_with("adaptive")).collect();
+        let adaptive: Vec<&Run> =
+            runs.iter().filter(|r| r.label.starts_with("adaptive") && r.stopped_at.is_none()).collect();
         if let Some(best) = adaptive.iter().min_by(|a, b| err(a).total_cmp(&err(b))) {
             let e = err(best);
             let cheapest_uniform =
@@ -487,6 +528,7 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
             }
         }
     }
+    s.push_str(&claims(test, runs)?);
     if !implicit.is_empty() {
         s.push_str(&implicit_report(runs, implicit)?);
     }
@@ -494,6 +536,210 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     for (name, caption) in figs {
         writeln!(s, "![{caption}](../figures/{name})\n")?;
     }
+    Ok(s)
+}
+
+/// The sample in force at time `t` (the last one taken at or before it).
+fn sample_at(r: &Run, t: f64) -> &Sample {
+    r.samples.iter().take_while(|s| s.t <= t + 1e-12).last().unwrap_or(&r.samples[0])
+}
+
+/// The fraction of the samples of `a` with `t0 < t ≤ t1` for which `pred(a's sample, b's sample at
+/// that time)` holds.
+fn fraction(a: &Run, b: &Run, (t0, t1): (f64, f64), pred: impl Fn(&Sample, &Sample) -> bool) -> f64 {
+    let span: Vec<&Sample> = a.samples.iter().filter(|s| s.t > t0 && s.t <= t1).collect();
+    let hits = span.iter().filter(|s| pred(s, sample_at(b, s.t))).count();
+    hits as f64 / span.len().max(1) as f64
+}
+
+fn yes(b: bool) -> &'static str {
+    if b { "yes" } else { "**no**" }
+}
+
+/// The thesis's qualitative claims about its adaptive runs (spec §7.6), each checked on ours: one
+/// column per variant of the thesis's remesher.
+fn claims(test: &Test, runs: &[Run]) -> Result<String> {
+    let find = |p: &str| runs.iter().find(|r| r.label.starts_with(p) || r.label.contains(p));
+    let (Some(coarse), Some(fine), Some(sub)) = (find("5 × 5"), find("17 × 17"), find("1-to-4")) else {
+        return Ok(String::new());
+    };
+    let variants: Vec<&Run> = runs.iter().filter(|r| r.label.starts_with("adaptive: Oliveira")).collect();
+    if variants.is_empty() {
+        return Ok(String::new());
+    }
+    let end = test.duration();
+    let per_step = |r: &Run| r.wall_s / r.steps.max(1) as f64;
+    let last = |r: &Run| *r.samples.last().expect("samples");
+    type Check<'a> = Box<dyn Fn(&Run) -> String + 'a>;
+    let mut rows: Vec<(&str, &str, Check)> = Vec::new();
+    let fewer_faces = Box::new(|a: &Run| {
+        let f = fraction(a, fine, (0.0, end), |x, y| x.nf < y.nf);
+        format!("{} ({:.0} % of the run)", yes(f > 0.99), 100.0 * f)
+    });
+    match test.number {
+        1 => {
+            rows.push((
+                "(b) the adaptive particle count stays below the fine mesh's 289",
+                "yes",
+                Box::new(|a: &Run| {
+                    let v = a.samples.iter().map(|s| s.nv).max().unwrap_or(0);
+                    format!("{} (max {v})", yes(v < fine.samples[0].nv))
+                }),
+            ));
+            rows.push((
+                "(d) adaptive min mass falls and max k rises",
+                "yes",
+                Box::new(|a: &Run| {
+                    let (s0, s1) = (a.samples[0], last(a));
+                    format!(
+                        "{} (m_min {:.2e} → {:.2e} kg, k_max {:.0} → {:.0} N/m)",
+                        yes(s1.m_min < s0.m_min && s1.k_max > s0.k_max),
+                        s0.m_min,
+                        s1.m_min,
+                        s0.k_max,
+                        s1.k_max
+                    )
+                }),
+            ));
+            rows.push((
+                "(e) adaptive Δt above the fine Δt for about the first half",
+                "yes",
+                Box::new(|a: &Run| {
+                    let f = fraction(a, fine, (0.0, 0.5 * end), |x, y| x.dt > y.dt);
+                    format!("{} ({:.0} % of the first half)", yes(f > 0.5), 100.0 * f)
+                }),
+            ));
+            rows.push((
+                "(f) fewer steps and less wall time than the fine run",
+                "yes (134 127 vs 174 312 frames; 10 402 vs 19 238 s)",
+                Box::new(|a: &Run| {
+                    format!(
+                        "{} ({} vs {} steps; {:.1} vs {:.1} s)",
+                        yes(a.steps < fine.steps && a.wall_s < fine.wall_s),
+                        a.steps,
+                        fine.steps,
+                        a.wall_s,
+                        fine.wall_s
+                    )
+                }),
+            ));
+            rows.push((
+                "(g) time per step: coarse < adaptive < fine",
+                "yes (0.011 < 0.078 < 0.110 s)",
+                Box::new(|a: &Run| {
+                    let (c, x, f) = (per_step(coarse), per_step(a), per_step(fine));
+                    format!("{} ({c:.1e} / {x:.1e} / {f:.1e} s)", yes(c < x && x < f))
+                }),
+            ));
+            rows.push(("fewer faces than the fine mesh throughout (Ch. 6)", "yes", fewer_faces));
+        }
+        2 => {
+            rows.push((
+                "(b) ends with more elements than the fine mesh",
+                "yes",
+                Box::new(|a: &Run| {
+                    let (x, f) = (last(a).nf, last(fine).nf);
+                    format!("{} ({x} vs {f} faces)", yes(x > f))
+                }),
+            ));
+            rows.push((
+                "(c) adaptive Δt smaller than the fine Δt",
+                "yes",
+                Box::new(|a: &Run| {
+                    let f = fraction(a, fine, (0.0, end), |x, y| x.dt < y.dt);
+                    format!("{} ({:.0} % of the run)", yes(f > 0.5), 100.0 * f)
+                }),
+            ));
+            rows.push((
+                "(c) more steps and more wall time than the fine run",
+                "yes (1 020 828 vs 346 795 frames; 35 986 vs 13 871 s)",
+                Box::new(|a: &Run| {
+                    format!(
+                        "{} ({} vs {} steps; {:.1} vs {:.1} s)",
+                        yes(a.steps > fine.steps && a.wall_s > fine.wall_s),
+                        a.steps,
+                        fine.steps,
+                        a.wall_s,
+                        fine.wall_s
+                    )
+                }),
+            ));
+            rows.push((
+                "(c) less time per step than the fine run",
+                "yes (0.035 vs 0.040 s)",
+                Box::new(|a: &Run| {
+                    let (x, f) = (per_step(a), per_step(fine));
+                    format!("{} ({x:.1e} vs {f:.1e} s)", yes(x < f))
+                }),
+            ));
+            rows.push(("fewer faces than the fine mesh throughout (Ch. 6)", "no (contradicted by (b))", fewer_faces));
+        }
+        _ => {
+            rows.push((
+                "(b) remeshing starts with more elements than 1-to-4 (at 0.1 s)",
+                "yes",
+                Box::new(|a: &Run| {
+                    let (x, y) = (sample_at(a, 0.1).nf, sample_at(sub, 0.1).nf);
+                    format!("{} ({x} vs {y} faces)", yes(x > y))
+                }),
+            ));
+            rows.push((
+                "(b) 1-to-4 ends with more elements",
+                "yes, far more",
+                Box::new(|a: &Run| {
+                    let (x, y) = (last(a).nf, last(sub).nf);
+                    format!("{} ({x} vs {y} faces)", yes(y > x))
+                }),
+            ));
+            rows.push((
+                "(c) remeshing Δt always smaller than 1-to-4's",
+                "yes",
+                Box::new(|a: &Run| {
+                    let f = fraction(a, sub, (0.0, end), |x, y| x.dt < y.dt);
+                    format!("{} ({:.0} % of the run)", yes(f > 0.99), 100.0 * f)
+                }),
+            ));
+            rows.push((
+                "(d) remeshing: more steps, about half the time per step",
+                "yes (269 071 vs 122 509 frames; 0.079 vs 0.164 s)",
+                Box::new(|a: &Run| {
+                    let r = per_step(a) / per_step(sub);
+                    format!(
+                        "{} ({} vs {} steps; per step {:.2}× 1-to-4's)",
+                        yes(a.steps > sub.steps && r < 0.75),
+                        a.steps,
+                        sub.steps,
+                        r
+                    )
+                }),
+            ));
+            rows.push((
+                "(e) remeshing makes edges shorter than 1-to-4's",
+                "yes (1-to-4 ≈ 3 cm)",
+                Box::new(|a: &Run| format!("{} ({:.4} vs {:.4} m)", yes(a.min_edge < sub.min_edge), a.min_edge, sub.min_edge)),
+            ));
+            rows.push(("fewer faces than the fine mesh throughout (Ch. 6)", "yes", fewer_faces));
+        }
+    }
+    let mut s = String::new();
+    writeln!(s, "
+The thesis's claims about this test (spec §7.6), checked on our runs:
+")?;
+    write!(s, "| claim | thesis |")?;
+    for v in &variants {
+        write!(s, " {} |", v.label.trim_start_matches("adaptive: "))?;
+    }
+    writeln!(s)?;
+    writeln!(s, "|---|---|{}", "---|".repeat(variants.len()))?;
+    for (claim, thesis, check) in &rows {
+        write!(s, "| {claim} | {thesis} |")?;
+        for v in &variants {
+            let cell = if v.stopped_at.is_some() { "— (stopped)".to_string() } else { check(v) };
+            write!(s, " {cell} |")?;
+        }
+        writeln!(s)?;
+    }
+    writeln!(s)?;
     Ok(s)
 }
 
