@@ -1,4 +1,5 @@
-//! `cargo xtask figures`: Fig. 4.1 and rendered frames of every FLEX3D scene into `docs/figures/`.
+//! `cargo xtask figures`: Fig. 4.1 and rendered frames of every FLEX3D scene, Oliveira's drapes and Nunes's
+//! controller figures ([`crate::nunes_figures`]) into `docs/figures/`.
 
 use anima::experiments::{self, ThesisScene, run_to_frame};
 use anima::picture::{camera_along, labelled_frame, scene_bounds};
@@ -8,7 +9,7 @@ use anima_ode::Integrator;
 use anima_viz::{Image, LinePlot, Series};
 use anyhow::Result;
 
-pub fn run() -> Result<()> {
+pub fn run(only: Option<&str>) -> Result<()> {
     let dir = crate::root().join("docs/figures");
     std::fs::create_dir_all(&dir)?;
     let save = |name: &str, img: &Image| -> Result<()> {
@@ -17,6 +18,11 @@ pub fn run() -> Result<()> {
         eprintln!("xtask: wrote docs/figures/{name}");
         Ok(())
     };
+    match only {
+        None => {}
+        Some("nunes") => return crate::nunes_figures::figures(&save),
+        Some(other) => anyhow::bail!("unknown figure group `{other}` (known: nunes)"),
+    }
     save("fig-4-1-mass-spring.png", &fig_4_1()?)?;
     save("fig-4-2-step-size.png", &fig_4_2()?)?;
     for scene in ThesisScene::ALL {
@@ -24,6 +30,7 @@ pub fn run() -> Result<()> {
         save(&format!("flex3d-{}.png", scene.slug()), &scene_sheet(scene)?)?;
     }
     crate::oliveira::figures(&save)?;
+    crate::nunes_figures::figures(&save)?;
     Ok(())
 }
 

@@ -4,6 +4,7 @@
 mod bench;
 mod figures;
 mod nunes;
+mod nunes_figures;
 mod oliveira;
 mod oliveira_adaptive;
 mod oliveira_implicit;
@@ -40,8 +41,12 @@ enum Command {
         #[arg(long)]
         adaptive: bool,
     },
-    /// Regenerate every reference plot and figure scene into docs/figures/.
-    Figures,
+    /// Regenerate every reference plot and figure scene into docs/figures/ (a few minutes);
+    /// `--only nunes` draws only the controller figures (strobe pictures and optimiser comparisons).
+    Figures {
+        #[arg(long)]
+        only: Option<String>,
+    },
     /// Speed against error for every integrator, stability limits and the standard sheet: writes
     /// docs/benchmarks.md and its plots (several minutes; --quick skips the smallest steps).
     Bench {
@@ -66,7 +71,7 @@ fn main() -> Result<()> {
             None => anyhow::bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
         },
         Command::Reproduce { experiment, friction, .. } => reproduce::run(&experiment, &friction),
-        Command::Figures => figures::run(),
+        Command::Figures { only } => figures::run(only.as_deref()),
         Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
     }
 }

@@ -116,6 +116,13 @@ fn long_run(c: Controller, iterations: u64) -> Result<nunes::WalkOutcome> {
     Ok(nunes::walk(c, iterations, &rules, &[], |_| ())?)
 }
 
+/// The thesis's two walking stages (spec §8.1.4): 15 global draws, then 30 one-parameter draws over the
+/// whole interval, over `n` parameters.
+pub fn walk_stages(n: usize) -> Vec<Stage> {
+    let all: Vec<usize> = (0..n).collect();
+    vec![Stage::global("global", all.clone(), 15), Stage::local_single("single", all, 30, Interval::Fixed)]
+}
+
 /// The thesis's main walking experiment (spec §8.1.4–§8.1.6): 15 global + 30 one-parameter
 /// evaluations of the greedy search over p2, p3, p5, p6 ∈ [−0.25, 0.75].
 fn walk() -> Result<String> {
@@ -123,12 +130,7 @@ fn walk() -> Result<String> {
     let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
     let space = base.space(&ids);
     let x0 = base.values_of(&ids);
-    let all: Vec<usize> = (0..ids.len()).collect();
-    let stages = vec![
-        Stage::global("global", all.clone(), 15),
-        Stage::local_single("single", all, 30, Interval::Fixed),
-    ];
-    let mut opt = GreedySearch::new(space, stages, x0.clone(), SEED)?;
+    let mut opt = GreedySearch::new(space, walk_stages(ids.len()), x0.clone(), SEED)?;
     let objective = |x: &[f64]| walk_fitness(&base, x);
     let log = optimise_logged("walk-greedy", &mut opt, &objective, 46)?;
 
@@ -219,6 +221,27 @@ pub fn throw_fitness(base: &Controller, ids: &[anima_control::ParamId], x: &[f64
     nunes::throw(c, &nunes::BASKET, 2000, |_| ()).map_or(0.0, |o| o.fitness_capped(cap))
 }
 
+/// The thesis's throw stage (spec §8.3.2): `evaluations` draws, each modifying either (s1, e1) or
+/// (s2, e2, τ2), chosen at random, in a window of ±25 % of the interval centred on the current value.
+pub fn throw_stage(base: &Controller, ids: &[anima_control::ParamId], evaluations: usize) -> Stage {
+    let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
+    let group = |names: &[&str]| -> Vec<usize> {
+        names.iter().map(|n| labels.iter().position(|l| l.contains(n)).expect("throw parameter")).collect()
+    };
+    let groups = vec![group(&["E1/shoulder_l", "E1/elbow_l"]), group(&["E2/shoulder_l", "E2/elbow_l", "T2"])];
+    Stage {
+        name: "local".into(),
+        dims: (0..ids.len()).collect(),
+        evaluations,
+        modifier: anima_control::optimise::Modifier::LocalSubset {
+            groups,
+            choice: anima_control::optimise::GroupChoice::Random,
+            interval: Interval::PartiallyReduced { fraction: 0.5 },
+        },
+        batch: 1,
+    }
+}
+
 /// The thesis's throw optimisation (spec §8.3.2): 400 evaluations, each modifying either (s1, e1)
 /// or (s2, e2, τ2) in a window of ±25 % of the interval centred on the current value.
 fn throw() -> Result<String> {
@@ -227,22 +250,7 @@ fn throw() -> Result<String> {
     let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
     let space = base.space(&ids);
     let x0 = base.values_of(&ids);
-    let group = |names: &[&str]| -> Vec<usize> {
-        names.iter().map(|n| labels.iter().position(|l| l.contains(n)).expect("throw parameter")).collect()
-    };
-    let groups = vec![group(&["E1/shoulder_l", "E1/elbow_l"]), group(&["E2/shoulder_l", "E2/elbow_l", "T2"])];
-    let stage = Stage {
-        name: "local".into(),
-        dims: (0..ids.len()).collect(),
-        evaluations: 400,
-        modifier: anima_control::optimise::Modifier::LocalSubset {
-            groups,
-            choice: anima_control::optimise::GroupChoice::Random,
-            interval: Interval::PartiallyReduced { fraction: 0.5 },
-        },
-        batch: 1,
-    };
-    let mut opt = GreedySearch::new(space, vec![stage], x0.clone(), SEED)?;
+    let mut opt = GreedySearch::new(space, vec![throw_stage(&base, &ids, 400)], x0.clone(), SEED)?;
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
     let objective = |x: &[f64]| throw_fitness(&base, &ids, x, cap);
     let log = optimise_logged("throw-greedy-capped", &mut opt, &objective, 401)?;

@@ -167,7 +167,11 @@ struct Run {
 impl Test {
     /// Simulated time, s: the thesis's full duration, or `short` with `ANIMA_ADAPTIVE_SHORT=1`.
     fn duration(&self) -> f64 {
-        if std::env::var("ANIMA_ADAPTIVE_SHORT").is_ok_and(|v| v == "1") { self.short } else { self.snapshots[3] }
+        if std::env::var("ANIMA_ADAPTIVE_SHORT").is_ok_and(|v| v == "1") {
+            self.short
+        } else {
+            self.snapshots[3]
+        }
     }
 }
 
@@ -672,7 +676,11 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
                     format!("{} ({x:.1e} vs {f:.1e} s)", yes(x < f))
                 }),
             ));
-            rows.push(("fewer faces than the fine mesh throughout (Ch. 6)", "no (contradicted by (b))", fewer_faces));
+            rows.push((
+                "fewer faces than the fine mesh throughout (Ch. 6)",
+                "no (contradicted by (b))",
+                fewer_faces,
+            ));
         }
         _ => {
             rows.push((
@@ -716,15 +724,20 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
             rows.push((
                 "(e) remeshing makes edges shorter than 1-to-4's",
                 "yes (1-to-4 ≈ 3 cm)",
-                Box::new(|a: &Run| format!("{} ({:.4} vs {:.4} m)", yes(a.min_edge < sub.min_edge), a.min_edge, sub.min_edge)),
+                Box::new(|a: &Run| {
+                    format!("{} ({:.4} vs {:.4} m)", yes(a.min_edge < sub.min_edge), a.min_edge, sub.min_edge)
+                }),
             ));
             rows.push(("fewer faces than the fine mesh throughout (Ch. 6)", "yes", fewer_faces));
         }
     }
     let mut s = String::new();
-    writeln!(s, "
+    writeln!(
+        s,
+        "
 The thesis's claims about this test (spec §7.6), checked on our runs:
-")?;
+"
+    )?;
     write!(s, "| claim | thesis |")?;
     for v in &variants {
         write!(s, " {} |", v.label.trim_start_matches("adaptive: "))?;

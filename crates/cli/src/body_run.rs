@@ -284,7 +284,7 @@ fn write_png(path: &Path, img: &Image) -> Result<()> {
 
 const WIDTH: u32 = 480;
 const HEIGHT: u32 = 360;
-const SKY: [u8; 3] = [250, 250, 246];
+pub const SKY: [u8; 3] = [250, 250, 246];
 const GROUND: [u8; 3] = [205, 195, 175];
 const OUTLINE: [u8; 3] = [40, 40, 40];
 
@@ -309,47 +309,58 @@ fn view_for(world: &World) -> Result<View2d> {
 fn draw(world: &World, view: &View2d, poses: &mut Vec<BodyPose>) -> Result<Image> {
     let mut img = Image::new(WIDTH, HEIGHT, SKY)?;
     if let Some(g) = world.settings().ground {
-        let (_, row) = view.to_px(0.0, g.height);
-        let w = f64::from(WIDTH);
-        fill_polygon(
-            &mut img,
-            &[(0.0, row), (w, row), (w, f64::from(HEIGHT)), (0.0, f64::from(HEIGHT))],
-            GROUND,
-        );
+        draw_ground(&mut img, view, g.height);
     }
     for m in 0..world.n_models() {
         world.body_poses(m, poses)?;
-        for side in [Side::Right, Side::Centre, Side::Left] {
-            for p in poses.iter().filter(|p| p.side == side) {
-                let colour = match p.side {
-                    Side::Left => [60, 170, 60],
-                    Side::Right => [210, 60, 50],
-                    Side::Centre => [120, 140, 170],
-                };
-                match p.shape {
-                    Shape::Box { width, height } => {
-                        let (s, c) = p.angle.sin_cos();
-                        let corner = |u: f64, v: f64| {
-                            let (x, y) = (u * width / 2.0, v * height / 2.0);
-                            view.to_px(p.centre[0] + c * x - s * y, p.centre[1] + s * x + c * y)
-                        };
-                        let pts =
-                            [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
-                        fill_polygon(&mut img, &pts, colour);
-                        stroke_polygon(&mut img, &pts, 1.0, OUTLINE);
-                    }
-                    Shape::Ball { radius } => {
-                        let c = view.to_px(p.centre[0], p.centre[1]);
-                        fill_disc(&mut img, c, radius * view.scale + 1.0, OUTLINE);
-                        fill_disc(&mut img, c, radius * view.scale, [230, 140, 40]);
-                    }
-                }
-            }
-        }
+        draw_bodies(&mut img, view, poses, 1.0);
     }
     let t = format!("t = {:.2} s", world.time());
     img.label(8, 6, &t, 16.0)?;
     Ok(img)
+}
+
+/// Draws one model's bodies as box figures: centre bodies grey-blue, left limbs green, right limbs red,
+/// balls orange; the left side last so that it lies in front, as the thesis's figures show it. `weight`
+/// in (0, 1] fades the colours towards the sky (older frames of a strobe picture).
+pub fn draw_bodies(img: &mut Image, view: &View2d, poses: &[BodyPose], weight: f64) {
+    let fade = |c: [u8; 3]| {
+        let w = weight.clamp(0.0, 1.0);
+        [0, 1, 2].map(|i| (w * f64::from(c[i]) + (1.0 - w) * f64::from(SKY[i])).round() as u8)
+    };
+    for side in [Side::Right, Side::Centre, Side::Left] {
+        for p in poses.iter().filter(|p| p.side == side) {
+            let colour = fade(match p.side {
+                Side::Left => [60, 170, 60],
+                Side::Right => [210, 60, 50],
+                Side::Centre => [120, 140, 170],
+            });
+            match p.shape {
+                Shape::Box { width, height } => {
+                    let (s, c) = p.angle.sin_cos();
+                    let corner = |u: f64, v: f64| {
+                        let (x, y) = (u * width / 2.0, v * height / 2.0);
+                        view.to_px(p.centre[0] + c * x - s * y, p.centre[1] + s * x + c * y)
+                    };
+                    let pts = [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
+                    fill_polygon(img, &pts, colour);
+                    stroke_polygon(img, &pts, 1.0, fade(OUTLINE));
+                }
+                Shape::Ball { radius } => {
+                    let c = view.to_px(p.centre[0], p.centre[1]);
+                    fill_disc(img, c, radius * view.scale + 1.0, fade(OUTLINE));
+                    fill_disc(img, c, radius * view.scale, fade([230, 140, 40]));
+                }
+            }
+        }
+    }
+}
+
+/// Fills everything below `height` (world metres) with the ground colour.
+pub fn draw_ground(img: &mut Image, view: &View2d, height: f64) {
+    let (_, row) = view.to_px(0.0, height);
+    let (w, h) = (f64::from(img.width()), f64::from(img.height()));
+    fill_polygon(img, &[(0.0, row), (w, row), (w, h), (0.0, h)], GROUND);
 }
 
 /// Writes the summary as pretty JSON.

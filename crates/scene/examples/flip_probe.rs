@@ -6,7 +6,10 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let iters = args.first().map_or(600, |a| a.parse().expect("iterations"));
     let mut spacing = nunes::FLIP_SPACING;
-    let mut c = nunes::parse(nunes::BACKFLIP_RON).expect("backflip.ron");
+    // `FLIP_RON=file` runs another controller (e.g. one `tune_flip` wrote).
+    let text = std::env::var("FLIP_RON")
+        .map_or(nunes::BACKFLIP_RON.to_string(), |f| std::fs::read_to_string(f).expect("controller file"));
+    let mut c = nunes::parse(&text).expect("controller");
     // Overrides: `label=value` (a controller parameter, e.g. `B-PUSHER/E1/hip_l=0.5`) or `spacing=0.8`.
     for a in args.iter().skip(1) {
         let (name, v) = a.split_once('=').expect("label=value");

@@ -68,7 +68,10 @@ const GENES: &[Gene] = &[
     g(&["B-ACRO-BODY/E7/acrobat/hip_r"], -0.4, 1.6),
     g(&["B-ACRO-BODY/E7/acrobat/knee_l", "B-ACRO-BODY/E7/acrobat/knee_r"], -1.6, 0.0),
     g(&["B-ACRO-ARMS/E2/acrobat/shoulder_l", "B-ACRO-ARMS/E2/acrobat/shoulder_r"], 0.0, 2.4),
-    g(&["B-ACRO-BODY/E8/acrobat/hip_l", "B-ACRO-BODY/E8/acrobat/hip_r"], -0.3, 0.8),
+    g(&["B-ACRO-BODY/E8/acrobat/hip_l"], -0.6, 1.2),
+    g(&["B-ACRO-BODY/E8/acrobat/hip_r"], -0.6, 1.2),
+    g(&["B-ACRO-BODY/E8/acrobat/waist"], -0.8, 0.4),
+    g(&["B-ACRO-BODY/E8/acrobat/spine"], -0.6, 0.4),
     g(&["B-ACRO-BODY/E8/acrobat/knee_l", "B-ACRO-BODY/E8/acrobat/knee_r"], -1.0, 0.0),
     g(&["B-ACRO-BODY/E8/acrobat/ankle_l", "B-ACRO-BODY/E8/acrobat/ankle_r"], -0.3, 0.6),
 ];
@@ -138,7 +141,8 @@ fn score(c: Controller) -> f64 {
     s += 3.0 * out.max_rotation.clamp(0.0, two_pi) + 2.0 * (out.max_pelvis_height - 1.0).clamp(0.0, 1.0);
     if out.max_rotation > two_pi - 1.0 {
         if let Some(l) = out.landed_at {
-            s += 5.0 - 2.0 * (out.final_rotation - two_pi).abs().min(2.0);
+            s += 5.0 - 3.0 * (out.final_rotation - two_pi).abs().min(3.0);
+            s += 5.0 * ((out.final_pelvis_height - 0.5) / 0.45).clamp(0.0, 1.0);
             s += 10.0 * (out.iterations.saturating_sub(l)) as f64 / (N - l) as f64;
         }
         if out.standing {
@@ -155,7 +159,10 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let budget: usize = args.first().map_or(400, |a| a.parse().expect("evaluations"));
     let seed: u64 = args.get(1).map_or(1, |a| a.parse().expect("seed"));
-    let mut base = nunes::parse(nunes::BACKFLIP_RON).expect("backflip.ron");
+    // `FLIP_RON=file` starts from another controller (e.g. an earlier run's output).
+    let text = std::env::var("FLIP_RON")
+        .map_or(nunes::BACKFLIP_RON.to_string(), |f| std::fs::read_to_string(f).expect("controller file"));
+    let mut base = nunes::parse(&text).expect("controller");
     for a in args.iter().skip(2) {
         let (name, v) = a.split_once('=').expect("label=value");
         set(&mut base, name, v.parse().expect("number"));

@@ -119,3 +119,17 @@ fn the_optimised_thrower_puts_the_ball_through_the_hoop() {
     let before = nunes::throw(nunes::parse(nunes::THROW_RON).unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
     assert!(out.fitness_capped(cap) > before.fitness_capped(cap) + 2.0, "{out:?} {before:?}");
 }
+
+#[test]
+fn the_committed_backflip_turns_over_and_lands_on_both_feet() {
+    let c = nunes::parse(nunes::BACKFLIP_RON).unwrap();
+    let out = nunes::backflip(c, nunes::FLIP_SPACING, 380, |_| ()).unwrap();
+    // A full backward turn of the trunk (at least 2π − 0.5 rad), both feet down after the flight, and
+    // no body of the acrobat but its feet ever on the ground. It does not yet stand up afterwards: it
+    // ends in a deep crouch (docs/reproduction/nunes.md), so `flipped()` is not asserted.
+    assert!(out.max_rotation >= 2.0 * std::f64::consts::PI - 0.5, "{out:?}");
+    assert!(out.landed_at.is_some() && !out.touched_down, "{out:?}");
+    assert_eq!(out.iterations, 380, "{out:?}");
+    // The thesis's timing (spec §8.4.5): the acrobat's T5 fires 5 iterations after the push begins.
+    assert_eq!(out.acrobat_e6_at.unwrap() - out.push_at.unwrap(), 5, "{out:?}");
+}

@@ -1,0 +1,294 @@
+//! `cargo xtask figures` for Nunes 2006: strobe pictures of the walker before and after optimisation
+//! (Fig. 6.7), the throw (Fig. 6.12) and the assisted backflip (Fig. 6.17), and the best fitness against
+//! evaluations of every optimiser on the walking and throwing objectives.
+//!
+//! A strobe picture overlays the figure every few control iterations, older frames faded towards the
+//! sky, in the thesis's side view (x forward, y up).
+
+use anima::body_run::{SKY, draw_bodies, draw_ground};
+use anima_body::BodyPose;
+use anima_control::Controller;
+use anima_control::optimise::{
+    Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Optimiser, RandomSearch, RunLog, run,
+};
+use anima_scene::character::Character;
+use anima_scene::nunes::{self, WalkRules};
+use anima_viz::{Image, LinePlot, Series, View2d, draw_line, fill_disc};
+use anyhow::{Context, Result};
+
+use crate::nunes::{SEED, throw_fitness, throw_stage, walk_fitness, walk_stages};
+
+/// Every body of every model after one control iteration.
+type Frame = Vec<Vec<BodyPose>>;
+
+fn capture(c: &Character) -> Frame {
+    let world = &c.env.world;
+    (0..world.n_models())
+        .map(|m| {
+            let mut poses = Vec::new();
+            world.body_poses(m, &mut poses).expect("a model of this world");
+            poses
+        })
+        .collect()
+}
+
+/// World-space bounds (x0, y0, x1, y1) of the body centres of `frames`, with `pad` metres around.
+fn bounds<'a>(frames: impl Iterator<Item = &'a Frame>, pad: f64) -> (f64, f64, f64, f64) {
+    let mut b = (f64::INFINITY, 0.0f64, f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for p in frames.flatten().flatten() {
+        b.0 = b.0.min(p.centre[0]);
+        b.2 = b.2.max(p.centre[0]);
+        b.3 = b.3.max(p.centre[1]);
+    }
+    (b.0 - pad, -0.15, b.2 + pad, b.3 + pad)
+}
+
+/// Draws `frames` (oldest first) over the ground, fading the older ones.
+fn strobe(img: &mut Image, view: &View2d, frames: &[&Frame]) {
+    draw_ground(img, view, 0.0);
+    let n = frames.len().max(2) - 1;
+    for (k, f) in frames.iter().enumerate() {
+        let weight = 0.3 + 0.7 * k as f64 / n as f64;
+        for model in f.iter() {
+            draw_bodies(img, view, model, weight);
+        }
+    }
+}
+
+/// Copies `panels` below one another into one picture.
+fn stack(panels: &[Image]) -> Result<Image> {
+    let w = panels.iter().map(Image::width).max().unwrap_or(1);
+    let h = panels.iter().map(Image::height).sum();
+    let mut out = Image::new(w, h, SKY)?;
+    let mut top = 0;
+    for p in panels {
+        for y in 0..p.height() {
+            for x in 0..p.width() {
+                out.set_pixel(x, top + y, p.pixel(x, y));
+            }
+        }
+        top += p.height();
+    }
+    Ok(out)
+}
+
+/// Fig. 6.7: the first `SECONDS` of the walker before and after the thesis's optimisation.
+fn fig_6_7() -> Result<Image> {
+    const SECONDS: f64 = 8.0;
+    const EVERY: usize = 8;
+    let iterations = (SECONDS / nunes::DT).round() as u64;
+    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
+    let mut runs = Vec::new();
+    for (name, text) in
+        [("walk.ron (before)", nunes::WALK_RON), ("walk-optimised.ron (after)", nunes::WALK_OPTIMISED_RON)]
+    {
+        let mut frames = Vec::new();
+        let out = nunes::walk(nunes::parse(text)?, iterations, &rules, &[], |c| frames.push(capture(c)))?;
+        runs.push((name, out, frames));
+    }
+    let (x0, y0, x1, y1) = bounds(runs.iter().flat_map(|r| r.2.iter()), 0.6);
+    let (width, height) = (1600, 300);
+    let view = View2d::fit(x0, y0, x1, y1, width, height, 8);
+    let mut panels = Vec::new();
+    for (name, out, frames) in &runs {
+        let mut img = Image::new(width, height, SKY)?;
+        let picked: Vec<&Frame> = frames.iter().step_by(EVERY).collect();
+        strobe(&mut img, &view, &picked);
+        let fell = if out.fell { ", falls" } else { "" };
+        img.label(
+            8,
+            6,
+            &format!(
+                "{name}: {:.1} m in {SECONDS} s{fell}; a frame every {:.1} s",
+                out.distance,
+                EVERY as f64 * nunes::DT
+            ),
+            16.0,
+        )?;
+        panels.push(img);
+    }
+    stack(&panels)
+}
+
+/// Fig. 6.12: the optimised throw, the ball's path and the hoop.
+fn fig_6_12() -> Result<Image> {
+    let mut frames = Vec::new();
+    let out = nunes::throw(nunes::parse(nunes::THROW_OPTIMISED_RON)?, &nunes::BASKET, 2000, |c| {
+        frames.push(capture(c))
+    })?;
+    let ball =
+        |f: &Frame| f[0].iter().find(|p| matches!(p.shape, anima_body::Shape::Ball { .. })).map(|p| p.centre);
+    let path: Vec<[f64; 2]> = frames.iter().filter_map(ball).collect();
+    let hoop = nunes::BASKET.hoop;
+    let r = nunes::BASKET.radius;
+    let x1 = path.iter().map(|p| p[0]).fold(hoop[0] + r, f64::max) + 0.4;
+    let y1 = path.iter().map(|p| p[1]).fold(hoop[1], f64::max) + 0.3;
+    let (x0, ..) = bounds(frames.iter(), 0.6);
+    let (width, height) = (900, 600);
+    let view = View2d::fit(x0, -0.15, x1, y1, width, height, 8);
+    let mut img = Image::new(width, height, SKY)?;
+    // The thrower until the release and a little after; the ball's whole path.
+    let last = out.released_at.map_or(frames.len(), |r| (r as usize + 10).min(frames.len()));
+    let picked: Vec<&Frame> = frames[..last].iter().step_by(4).collect();
+    strobe(&mut img, &view, &picked);
+    for w in path.windows(2) {
+        draw_line(&mut img, view.to_px(w[0][0], w[0][1]), view.to_px(w[1][0], w[1][1]), 2.0, [230, 140, 40]);
+    }
+    for p in path.iter().step_by(3) {
+        fill_disc(&mut img, view.to_px(p[0], p[1]), 3.0, [200, 100, 20]);
+    }
+    // The hoop (a rim seen from the side) and its post.
+    let rim = [40, 40, 40];
+    draw_line(
+        &mut img,
+        view.to_px(hoop[0] - r, hoop[1]),
+        view.to_px(hoop[0] + r, hoop[1]),
+        4.0,
+        [200, 40, 40],
+    );
+    draw_line(&mut img, view.to_px(hoop[0] + r, hoop[1]), view.to_px(hoop[0] + r + 0.1, hoop[1]), 2.0, rim);
+    draw_line(
+        &mut img,
+        view.to_px(hoop[0] + r + 0.1, 0.0),
+        view.to_px(hoop[0] + r + 0.1, hoop[1] + 0.5),
+        3.0,
+        rim,
+    );
+    img.label(
+        8,
+        6,
+        &format!(
+            "throw-optimised.ron: H_max {:.2} m, closest {:.2} m from the aimed point, {}",
+            out.h_max,
+            out.d_min,
+            if out.scored { "through the hoop" } else { "misses the hoop" }
+        ),
+        16.0,
+    )?;
+    Ok(img)
+}
+
+/// Fig. 6.17: the assisted backflip, from the push to the landing (or the end of the run).
+fn fig_6_17() -> Result<Image> {
+    let mut frames = Vec::new();
+    let out = nunes::backflip(nunes::parse(nunes::BACKFLIP_RON)?, nunes::FLIP_SPACING, 380, |c| {
+        frames.push(capture(c))
+    })?;
+    let start = out.push_at.map_or(0, |p| (p as usize).saturating_sub(6));
+    let end = out.landed_at.map_or(frames.len(), |l| (l as usize + 12).min(frames.len()));
+    let picked: Vec<&Frame> = frames[start..end.max(start + 1)].iter().step_by(3).collect();
+    let (x0, y0, x1, y1) = bounds(picked.iter().copied(), 0.8);
+    let (width, height) = (900, 560);
+    let view = View2d::fit(x0, y0, x1, y1, width, height, 8);
+    let mut img = Image::new(width, height, SKY)?;
+    strobe(&mut img, &view, &picked);
+    img.label(
+        8,
+        6,
+        &format!(
+            "backflip.ron: trunk turned {:.2} rad (a full turn is 6.28); {}",
+            out.max_rotation,
+            if out.flipped() {
+                "lands and stands"
+            } else if out.landed_at.is_some() {
+                "lands, does not stay standing"
+            } else {
+                "does not land on its feet"
+            }
+        ),
+        16.0,
+    )?;
+    Ok(img)
+}
+
+/// Best fitness so far against evaluations, one line per optimiser.
+pub fn fitness_plot(title: &str, y_label: &str, logs: &[(&str, RunLog)]) -> Result<Image> {
+    let mut plot = LinePlot::new(title, "evaluations", y_label);
+    for (name, log) in logs {
+        let mut best = f64::NEG_INFINITY;
+        let pts = log
+            .evaluations
+            .iter()
+            .enumerate()
+            .map(|(k, e)| {
+                if e.fitness > best {
+                    best = e.fitness;
+                }
+                ((k + 1) as f64, best)
+            })
+            .collect();
+        plot.series.push(Series::line(*name, pts));
+    }
+    Ok(plot.render(720, 440)?)
+}
+
+/// The four optimisers on one objective from `x0`, each to `budget` evaluations: the thesis's greedy
+/// search with `stages`, CMA-ES, random search and simulated annealing (seed 2006 for each).
+fn compare(
+    space: anima_control::optimise::Space,
+    x0: &[f64],
+    greedy: Vec<anima_control::optimise::Stage>,
+    budget: usize,
+    temperature: f64,
+    objective: &dyn anima_control::optimise::Objective,
+) -> Result<Vec<(&'static str, RunLog)>> {
+    let mut opts: Vec<(&'static str, Box<dyn Optimiser>)> = vec![
+        ("greedy (thesis)", Box::new(GreedySearch::new(space.clone(), greedy, x0.to_vec(), SEED)?)),
+        ("CMA-ES", Box::new(Cmaes::new(space.clone(), CmaesConfig::new(x0.to_vec(), 0.2), SEED)?)),
+        ("random search", Box::new(RandomSearch::new(space.clone(), 4, SEED)?)),
+        (
+            "annealing",
+            Box::new(Annealing::new(
+                space,
+                AnnealingConfig { x0: x0.to_vec(), t0: temperature, cooling: 0.95, step: 0.1, batch: 1 },
+                SEED,
+            )?),
+        ),
+    ];
+    let mut logs = Vec::new();
+    for (name, opt) in &mut opts {
+        eprintln!("xtask:   {name}, {budget} evaluations …");
+        let mut log = RunLog::default();
+        run(opt.as_mut(), objective, budget, &mut log);
+        let best = log.best().map_or(f64::NAN, |e| e.fitness);
+        eprintln!("xtask:   {name}: best {best:.3} after {} evaluations", log.len());
+        logs.push((*name, log));
+    }
+    Ok(logs)
+}
+
+fn walk_fitness_figure() -> Result<Image> {
+    let base = nunes::parse(nunes::WALK_RON)?;
+    let ids = base.free_params(&anima_control::Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+    let x0 = base.values_of(&ids);
+    let objective = |x: &[f64]| walk_fitness(&base, x);
+    let logs = compare(base.space(&ids), &x0, walk_stages(ids.len()), 45, 2.0, &objective)?;
+    fitness_plot("Walking: distance in 50 s (p2, p3, p5, p6)", "best fitness (m)", &logs)
+}
+
+fn throw_fitness_figure() -> Result<Image> {
+    let base: Controller = nunes::parse(nunes::THROW_RON)?;
+    let ids = base.free_params(&anima_control::Selection::all());
+    let x0 = base.values_of(&ids);
+    let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
+    let objective = |x: &[f64]| throw_fitness(&base, &ids, x, cap);
+    let budget = 400;
+    let logs =
+        compare(base.space(&ids), &x0, vec![throw_stage(&base, &ids, budget)], budget, 0.5, &objective)?;
+    fitness_plot("Throwing: Eq. 6.1 with the height cap", "best fitness", &logs)
+}
+
+/// Writes every Nunes figure through `save`.
+pub fn figures(save: &dyn Fn(&str, &Image) -> Result<()>) -> Result<()> {
+    eprintln!("xtask: Fig. 6.7 (walker strobe) …");
+    save("nunes-fig-6-7-walk.png", &fig_6_7().context("Fig. 6.7")?)?;
+    eprintln!("xtask: Fig. 6.12 (throw strobe) …");
+    save("nunes-fig-6-12-throw.png", &fig_6_12().context("Fig. 6.12")?)?;
+    eprintln!("xtask: Fig. 6.17 (backflip strobe) …");
+    save("nunes-fig-6-17-backflip.png", &fig_6_17().context("Fig. 6.17")?)?;
+    eprintln!("xtask: walking fitness against evaluations …");
+    save("nunes-walk-fitness.png", &walk_fitness_figure()?)?;
+    eprintln!("xtask: throwing fitness against evaluations …");
+    save("nunes-throw-fitness.png", &throw_fitness_figure()?)?;
+    Ok(())
+}
