@@ -397,38 +397,42 @@ Each test is run on four uniform meshes (5 × 5 and 17 × 17 from the scene file
 backward Euler at one fixed step (see the notes), against the same RK4 17 × 17 reference.\n\n";
 
 const NOTES: &str = "## Notes and deviations\n\n\
-* **Shortened runs.** To keep the whole `--adaptive` run near a few minutes on this machine the tests stop \
-early: Test I at 0.2 s (thesis 0.5 s), Test II at 0.2 s (thesis 1 s), Test III at 0.3 s (thesis 0.6 s). Errors \
-and pictures are taken at the thesis's snapshot times inside that span (four even times when fewer than three \
-fall inside). Timings are therefore not comparable in total with the thesis's tables, only per step.\n\
-* **Short-edge rule.** These runs use `ShortEdgeRule::MinLength` (reject a refinement patch with an edge shorter \
-than L⁰_min), not the spec's default literal (L⁰_min)² rule: in a trial Test III run the literal rule let 6.7 mm \
-edges through and took Δt to 1.9 × 10⁻⁷ s (about 50 times the cost). Contour bisection and ear-clipped fallbacks \
-can still leave edges below L⁰_min (see \"min rest edge\").\n\
+* **Durations.** Every run simulates the thesis's full test (0.5 s, 1 s, 0.6 s); errors and pictures are taken at \
+the thesis's four snapshot times. `ANIMA_ADAPTIVE_SHORT=1` runs the earlier shortened versions (0.2, 0.2, 0.3 s). \
+A run whose wall time passes 240 s is stopped where it is and marked \"stopped\" (its error then covers only the \
+snapshots it reached, and it is left out of the work–precision comparison and the claims).\n\
+* **Short-edge rule.** The thesis's remesher runs twice: with `ShortEdgeRule::MinLength` (reject a refinement \
+patch with an edge shorter than L⁰_min) and with the spec's literal (L⁰_min)² rule (the printed number, metres \
+squared read as metres). The literal rule accepts patches with much shorter edges (see \"min rest edge\"), so its \
+Δt is smaller and its steps more; on Test I it reproduces the thesis's frame count (132 919 against 134 127), which \
+supports the spec's reading that the thesis ran it. `OliveiraRemeshing::test_1/2/3` keep the literal rule (the \
+thesis's); `MinLength` is the switch for runs that cannot afford its steps. Contour bisection and ear-clipped fallbacks can still \
+leave edges below L⁰_min under either rule.\n\
 * **Push-out of new particles.** A new particle inside an object is moved to just outside the nearest surface point \
 and loses its velocity into the surface (the vertex-normal rule of `contact::push_out` threw particles inserted on \
 chords under the draped cloth far out of place and blew the Test III drape up).\n\
-* **Work–precision.** No remesher is 2× cheaper than the cheapest uniform mesh of equal error in these short \
-runs: the thesis's step rule ties Δt to the smallest spring, so any locally refined mesh pays the fine mesh's (or a \
-smaller) step over all of its particles, while the uniform 9 × 9 and 13 × 13 meshes are already accurate to \
-millimetres at these times.\n\
+* **Edge repulsion (A-24).** Edges the thesis's remesher may no longer refine (L⁰ < L⁰_min) are cast at the end of \
+every step and a hit is answered on both ends as a particle hit (`repel_unrefinable_edges`, on). 1-to-4 and the \
+sizing field do not use it.\n\
+* **Work–precision.** The error is against the 17 × 17 run, and a mass–spring cloth's drape depends on its mesh: \
+at full duration the uniform meshes themselves differ by centimetres (13 × 13 against 17 × 17), and a remeshed \
+cloth converges to neither. With RK4 the thesis's step rule also ties Δt to the smallest spring, so a locally \
+refined mesh pays the finest edge's step over all its particles. With a fixed implicit step the step no longer \
+depends on the mesh and the remeshers' cost is their element count plus the remeshing; see each verdict.\n\
 * **Backward Euler.** The second table of each test removes the step rule: every mesh and remesher runs backward \
 Euler (`Integrator::ImplicitEuler`, conjugate gradients, `ContactVelocity::EndOfStep`) at one fixed Δt = 1/4000 s, \
-so only the mesh differs. On the 17 × 17 mesh this step lands within a fraction of a millimetre of the RK4 \
-reference, so the errors of the other rows are the mesh's. The sizing field there keeps edges no shorter than \
-the reference's 6.25 cm (`SizingRemeshing::for_cloth(0.0625)`) and remeshes every 1/240 s: the error is measured \
-against the 17 × 17 mass–spring solution, which finer edges do not approach (a mass–spring cloth's response \
-depends on its mesh), and in trial runs 3 cm edges cost 3–7× the time for equal or larger errors; passes every \
-1/240 s rather than 1/60 s lowered Test III's error from 1.6 to 1.3 cm. Wall times under 0.1 s are within timer \
-and machine noise: each backward-Euler run is repeated five times and the fastest wall time is reported, \
-and a ratio near 2× can still fall on either side from one regeneration to the next.\n\
+so only the mesh differs. On the 17 × 17 mesh this step lands within millimetres of the RK4 reference, so the \
+errors of the other rows are the mesh's. The sizing field there keeps edges no shorter than the reference's \
+6.25 cm (`SizingRemeshing::for_cloth(0.0625)`) and remeshes every 1/240 s. Wall times under 0.1 s are within timer \
+and machine noise: each backward-Euler run is repeated five times and the fastest wall time is reported.\n\
 * **Remeshing interval.** The thesis remeshes after every step (Fig. 4.1); here the thesis's remesher and 1-to-4 \
 run a pass every 1 ms of simulated time (`interval_s`, 0 restores every step) because a pass costs more than a \
-step. The sizing field runs every 1/60 s.\n\
+step. The sizing field runs every 1/60 s with RK4.\n\
 * **Simplification guard.** A simplification patch that does not have fewer faces than the faces it replaces is \
 undone (anima's guard, counted as \"undone\"): with the spec's reading (original and simplification-made edges \
 are never stamped, §6.7) a flat region would otherwise be regenerated at the same size after every pass.\n\
-* **Edge contacts** (A-24, repulsion on colliding edges that may not be refined) are not applied.\n";
+* **Timing.** One core of a 2-core machine that was running other work at the same time: wall times are good to \
+±30 %.\n";
 
 fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     let mut s = String::new();

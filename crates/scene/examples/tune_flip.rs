@@ -167,15 +167,33 @@ fn main() {
         let (name, v) = a.split_once('=').expect("label=value");
         set(&mut base, name, v.parse().expect("number"));
     }
+    // A gene whose pose entry is a world angle after the turn (near 2π, e.g. the landing's trunk) keeps
+    // its interval, shifted by a turn.
+    let value = |g: &Gene| base.param(base.param_id(g.labels[0]).expect("gene label"));
+    let interval = |g: &Gene| {
+        let shift = if value(g) > std::f64::consts::PI { 2.0 * std::f64::consts::PI } else { 0.0 };
+        (g.lo + shift, g.hi + shift)
+    };
     let x0: Vec<f64> = GENES
         .iter()
-        .map(|g| base.param(base.param_id(g.labels[0]).expect("gene label")).clamp(g.lo, g.hi))
+        .map(|g| {
+            let (lo, hi) = interval(g);
+            value(g).clamp(lo, hi)
+        })
         .collect();
     let objective = |x: &[f64]| score(apply(&base, x));
     eprintln!("x0 score {:.3}", objective(&x0));
     let out_path = std::path::Path::new("target/nunes").join(format!("backflip-tuned-{seed}.ron"));
     let _ = std::fs::create_dir_all("target/nunes");
-    let space = Space { dims: GENES.iter().map(|g| Dim::new(g.labels[0], g.lo, g.hi)).collect() };
+    let space = Space {
+        dims: GENES
+            .iter()
+            .map(|g| {
+                let (lo, hi) = interval(g);
+                Dim::new(g.labels[0], lo, hi)
+            })
+            .collect(),
+    };
     // Initial step, in units of each interval (`TUNE_SIGMA`, default 0.15; 0.03 to refine).
     let sigma = std::env::var("TUNE_SIGMA").ok().and_then(|v| v.parse().ok()).unwrap_or(0.15);
     let mut cfg = CmaesConfig::new(x0, sigma);
