@@ -5,6 +5,7 @@ mod bench;
 mod figures;
 mod nunes;
 mod nunes_figures;
+mod nunes_optimisers;
 mod oliveira;
 mod oliveira_adaptive;
 mod oliveira_implicit;
@@ -30,7 +31,9 @@ enum Command {
     /// which also writes docs/reproduction/oliveira-results.md); oliveira-implicit: the fine drapes with
     /// implicit integrators against a converged reference (docs/reproduction/oliveira-implicit.md).
     /// Nunes 2006's controllers: nunes-walk, nunes-throw, nunes-flip, or nunes (all, which also writes
-    /// docs/reproduction/nunes-results.md).
+    /// docs/reproduction/nunes-results.md); beyond the thesis: nunes-optimisers (four optimisers over
+    /// --seeds seeds, docs/reproduction/nunes-optimisers.md) and nunes-robust (CMA-ES over pushes,
+    /// assets/controllers/walk-robust.ron).
     Reproduce {
         experiment: String,
         /// Friction reading for the scene experiments: literal (default) or viscous.
@@ -40,6 +43,9 @@ enum Command {
         /// docs/reproduction/oliveira-adaptive.md.
         #[arg(long)]
         adaptive: bool,
+        /// With nunes-optimisers: seeds per optimiser.
+        #[arg(long, default_value_t = 10)]
+        seeds: usize,
     },
     /// Regenerate every reference plot and figure scene into docs/figures/ (a few minutes);
     /// `--only nunes` draws only the controller figures (strobe pictures and optimiser comparisons).
@@ -70,7 +76,7 @@ fn main() -> Result<()> {
             Some(which) => oliveira_adaptive::reproduce(which),
             None => anyhow::bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
         },
-        Command::Reproduce { experiment, friction, .. } => reproduce::run(&experiment, &friction),
+        Command::Reproduce { experiment, friction, seeds, .. } => reproduce::run(&experiment, &friction, seeds),
         Command::Figures { only } => figures::run(only.as_deref()),
         Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
     }

@@ -158,8 +158,10 @@ struct Run {
     frames: Vec<(f64, Vec<DVec3>, Vec<[u32; 3]>)>,
     min_edge: f64,
     penetrations: usize,
-    /// Where the run was stopped by `RUN_WALL_CAP_S`, s.
+    /// Where the run was stopped by `RUN_WALL_CAP_S` or a failed step, s.
     stopped_at: Option<f64>,
+    /// Why a step failed (non-finite state), when one did.
+    failure: Option<String>,
     /// The objects as triangle meshes, and whether each is unbounded (a floor).
     objects: Vec<(TriangleMesh, bool)>,
 }
@@ -262,8 +264,18 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
     let start = Instant::now();
     let mut last_report = Instant::now();
     let mut stopped_at = None;
+    let mut failure = None;
     while c.cloth().time() < duration {
-        let r = c.step().with_context(|| format!("{} {label}", test.title))?;
+        let r = match c.step() {
+            Ok(r) => r,
+            Err(e) => {
+                // A run that blows up is a result (the literal short-edge rule can): kept, marked.
+                eprintln!("xtask:   {label}: failed: {e}");
+                stopped_at = Some(c.cloth().time());
+                failure = Some(e.to_string());
+                break;
+            }
+        };
         let t = c.cloth().time();
         if t - last_t >= every {
             samples.push(sample(&c, r.dt));
@@ -308,6 +320,7 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
         min_edge: anima_cloth::oliveira::adaptive::min_rest_edge(cloth.mesh()),
         penetrations: cloth.penetrations().len(),
         stopped_at,
+        failure,
         objects: object_meshes(cloth),
     })
 }
@@ -399,8 +412,9 @@ backward Euler at one fixed step (see the notes), against the same RK4 17 × 17 
 const NOTES: &str = "## Notes and deviations\n\n\
 * **Durations.** Every run simulates the thesis's full test (0.5 s, 1 s, 0.6 s); errors and pictures are taken at \
 the thesis's four snapshot times. `ANIMA_ADAPTIVE_SHORT=1` runs the earlier shortened versions (0.2, 0.2, 0.3 s). \
-A run whose wall time passes 240 s is stopped where it is and marked \"stopped\" (its error then covers only the \
-snapshots it reached, and it is left out of the work–precision comparison and the claims).\n\
+A run whose wall time passes 240 s is stopped where it is and marked \"stopped\", and one whose state turns \
+non-finite is marked \"failed\" (its error then covers only the snapshots it reached, and it is left out of the \
+work–precision comparison and the claims).\n\
 * **Short-edge rule.** The thesis's remesher runs twice: with `ShortEdgeRule::MinLength` (reject a refinement \
 patch with an edge shorter than L⁰_min) and with the spec's literal (L⁰_min)² rule (the printed number, metres \
 squared read as metres). The literal rule accepts patches with much shorter edges (see \"min rest edge\"), so its \
@@ -455,9 +469,10 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     for r in runs {
         let last = r.samples.last().expect("samples");
         let err = reference.map_or(f64::NAN, |f| rms(&r.points, &f.points));
-        let wall = match r.stopped_at {
-            Some(t) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
-            None => format!("{:.2}", r.wall_s),
+        let wall = match (r.stopped_at, &r.failure) {
+            (Some(_), Some(why)) => format!("{:.2}, **failed**: {why}", r.wall_s),
+            (Some(t), None) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
+            _ => format!("{:.2}", r.wall_s),
         };
         let err = match r.stopped_at {
             Some(_) if r.points.is_empty() => "—".to_string(),
@@ -751,7 +766,11 @@ The thesis's claims about this test (spec §7.6), checked on our runs:
     for (claim, thesis, check) in &rows {
         write!(s, "| {claim} | {thesis} |")?;
         for v in &variants {
-            let cell = if v.stopped_at.is_some() { "— (stopped)".to_string() } else { check(v) };
+            let cell = match (&v.stopped_at, &v.failure) {
+                (Some(_), Some(_)) => "— (failed)".to_string(),
+                (Some(_), None) => "— (stopped)".to_string(),
+                _ => check(v),
+            };
             write!(s, " {cell} |")?;
         }
         writeln!(s)?;

@@ -40,12 +40,20 @@ impl Report {
     }
 }
 
-pub fn run(experiment: &str, friction: &str) -> Result<()> {
+pub fn run(experiment: &str, friction: &str, seeds: usize) -> Result<()> {
     if experiment == "oliveira-implicit" {
         return crate::oliveira_implicit::reproduce();
     }
     if let Some(which) = experiment.strip_prefix("oliveira") {
         return crate::oliveira::reproduce(which);
+    }
+    if experiment == "nunes-optimisers" {
+        print!("{}", crate::nunes_optimisers::optimisers(seeds)?);
+        return Ok(());
+    }
+    if experiment == "nunes-robust" {
+        print!("{}", crate::nunes_optimisers::robust()?);
+        return Ok(());
     }
     if let Some(which) = experiment.strip_prefix("nunes") {
         return crate::nunes::reproduce(which);

@@ -4,54 +4,10 @@
 //! numbers were then written into `assets/controllers/walk.ron` by hand.
 //!
 //! `cargo run --release -p anima-scene --example tune_walk -- [evaluations] [iterations]`
-use anima_control::optimise::{Cmaes, CmaesConfig, Dim, RunLog, Space, run};
-use anima_control::{Controller, Selection};
+use anima_control::optimise::{Cmaes, CmaesConfig, RunLog, run};
+use anima_control::Selection;
+use anima_scene::nunes::walk_poses::{self, set as set_poses};
 use anima_scene::nunes::{self, WalkRules};
-
-const NAMES: [&str; 12] = [
-    "waist",
-    "e1_hip_sw",
-    "e1_knee_sw",
-    "e1_ankle_sw",
-    "e1_hip_st",
-    "e1_knee_st",
-    "e1_ankle_st",
-    "e3_hip_sw",
-    "e3_knee_sw",
-    "e3_ankle_sw",
-    "e3_hip_st",
-    "e3_ankle_st",
-];
-
-/// Writes pose vector `x` into the walking controller (E1/E3 and mirrored E4/E6).
-pub fn set_poses(c: &mut Controller, x: &[f64]) {
-    let mut set = |label: String, v: f64| {
-        let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
-        c.set_param(id, v);
-    };
-    for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
-        set(format!("W-LEGS/{state}/waist"), x[0]);
-        set(format!("W-LEGS/{state}/hip_{sw}"), x[1]);
-        set(format!("W-LEGS/{state}/knee_{sw}"), x[2]);
-        set(format!("W-LEGS/{state}/ankle_{sw}"), x[3]);
-        set(format!("W-LEGS/{state}/hip_{st}"), x[4]);
-        set(format!("W-LEGS/{state}/knee_{st}"), x[5]);
-        set(format!("W-LEGS/{state}/ankle_{st}"), x[6]);
-        let s = if sw == "l" { 1.0 } else { -1.0 };
-        set(format!("W-LEGS/{state}/inter_thigh"), s * (x[1] - x[4]));
-    }
-    for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
-        set(format!("W-LEGS/{state}/waist"), x[0]);
-        set(format!("W-LEGS/{state}/hip_{sw}"), x[7]);
-        set(format!("W-LEGS/{state}/knee_{sw}"), x[8]);
-        set(format!("W-LEGS/{state}/ankle_{sw}"), x[9]);
-        set(format!("W-LEGS/{state}/hip_{st}"), x[10]);
-        set(format!("W-LEGS/{state}/knee_{st}"), -0.05);
-        set(format!("W-LEGS/{state}/ankle_{st}"), x[11]);
-        let s = if sw == "l" { 1.0 } else { -1.0 };
-        set(format!("W-LEGS/{state}/inter_thigh"), s * (x[7] - x[10]));
-    }
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -106,11 +62,8 @@ fn main() {
         }
         total / settings.len() as f64
     };
-    let lo = [-0.4, 0.0, -1.6, -0.4, -0.6, -0.6, -0.4, -0.2, -1.0, -0.4, -0.6, -0.4];
-    let hi = [0.2, 1.2, 0.0, 0.6, 0.4, 0.0, 0.6, 1.0, 0.0, 0.4, 0.4, 0.6];
-    let x0 = vec![-0.05, 0.6, -1.1, 0.2, -0.1, -0.05, 0.0, 0.4, -0.05, 0.0, -0.2, 0.1];
-    let space =
-        Space { dims: NAMES.iter().zip(lo.iter().zip(hi)).map(|(n, (&a, b))| Dim::new(n, a, b)).collect() };
+    let x0 = walk_poses::SPEC.to_vec();
+    let space = walk_poses::space();
     let mut cfg = CmaesConfig::new(x0.clone(), 0.2);
     cfg.lambda = Some(10);
     let mut opt = Cmaes::new(space, cfg, 7).expect("cmaes");

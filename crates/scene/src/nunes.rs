@@ -154,6 +154,72 @@ pub fn walk(
     Ok(WalkOutcome { iterations: done, distance, fell, stopped })
 }
 
+/// A symmetric description of the walker's leg poses: W-LEGS's E1 and E3 by swing and stance leg (E4
+/// and E6 are their mirrors), with the inter-thigh target kept at hip_l − hip_r. The space the walking
+/// poses were re-authored in (`examples/tune_walk.rs`) and the one the optimiser comparison searches.
+pub mod walk_poses {
+    use anima_control::Controller;
+    use anima_control::optimise::{Dim, Space};
+
+    pub const NAMES: [&str; 12] = [
+        "waist",
+        "e1_hip_sw",
+        "e1_knee_sw",
+        "e1_ankle_sw",
+        "e1_hip_st",
+        "e1_knee_st",
+        "e1_ankle_st",
+        "e3_hip_sw",
+        "e3_knee_sw",
+        "e3_ankle_sw",
+        "e3_hip_st",
+        "e3_ankle_st",
+    ];
+    /// Interval of each number, rad.
+    pub const LO: [f64; 12] = [-0.4, 0.0, -1.6, -0.4, -0.6, -0.6, -0.4, -0.2, -1.0, -0.4, -0.6, -0.4];
+    pub const HI: [f64; 12] = [0.2, 1.2, 0.0, 0.6, 0.4, 0.0, 0.6, 1.0, 0.0, 0.4, 0.4, 0.6];
+    /// The spec's §8.1.2 proposal, with which our humanoid falls within seconds: the thesis's
+    /// "before optimisation" walker (`assets/controllers/walk-spec.ron`).
+    pub const SPEC: [f64; 12] = [-0.05, 0.6, -1.1, 0.2, -0.1, -0.05, 0.0, 0.4, -0.05, 0.0, -0.2, 0.1];
+
+    pub fn space() -> Space {
+        Space { dims: NAMES.iter().zip(LO.iter().zip(HI)).map(|(n, (&a, b))| Dim::new(n, a, b)).collect() }
+    }
+
+    /// Writes pose vector `x` into a walking controller (E1/E3 and mirrored E4/E6).
+    ///
+    /// # Panics
+    /// If the controller is not the walker (a W-LEGS pose entry is missing).
+    pub fn set(c: &mut Controller, x: &[f64]) {
+        let mut set = |label: String, v: f64| {
+            let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
+            c.set_param(id, v);
+        };
+        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
+            set(format!("W-LEGS/{state}/waist"), x[0]);
+            set(format!("W-LEGS/{state}/hip_{sw}"), x[1]);
+            set(format!("W-LEGS/{state}/knee_{sw}"), x[2]);
+            set(format!("W-LEGS/{state}/ankle_{sw}"), x[3]);
+            set(format!("W-LEGS/{state}/hip_{st}"), x[4]);
+            set(format!("W-LEGS/{state}/knee_{st}"), x[5]);
+            set(format!("W-LEGS/{state}/ankle_{st}"), x[6]);
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            set(format!("W-LEGS/{state}/inter_thigh"), s * (x[1] - x[4]));
+        }
+        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
+            set(format!("W-LEGS/{state}/waist"), x[0]);
+            set(format!("W-LEGS/{state}/hip_{sw}"), x[7]);
+            set(format!("W-LEGS/{state}/knee_{sw}"), x[8]);
+            set(format!("W-LEGS/{state}/ankle_{sw}"), x[9]);
+            set(format!("W-LEGS/{state}/hip_{st}"), x[10]);
+            set(format!("W-LEGS/{state}/knee_{st}"), -0.05);
+            set(format!("W-LEGS/{state}/ankle_{st}"), x[11]);
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            set(format!("W-LEGS/{state}/inter_thigh"), s * (x[7] - x[10]));
+        }
+    }
+}
+
 /// The thrower (both hands welded to the ball) standing on the ground, driven by `controller`.
 pub fn thrower_character(controller: Controller) -> Result<Character, CharacterError> {
     let mut world = World::new(world_settings(SUBSTEPS))?;

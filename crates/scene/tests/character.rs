@@ -133,3 +133,19 @@ fn the_committed_backflip_turns_over_and_lands_on_both_feet() {
     // The thesis's timing (spec §8.4.5): the acrobat's T5 fires 5 iterations after the push begins.
     assert_eq!(out.acrobat_e6_at.unwrap() - out.push_at.unwrap(), 5, "{out:?}");
 }
+
+#[test]
+fn a_hard_push_on_the_head_knocks_the_walker_down() {
+    // The push the optimiser comparison measures robustness with (a force on the head for two control
+    // steps): nothing happens without it, and an impulse far beyond any reported survival fells the
+    // walker, so the reported survivals are pushes that act.
+    let c = nunes::parse(nunes::WALK_OPTIMISED_RON).unwrap();
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    let run = |impulse: f64| {
+        let push = nunes::Push { at: 400, duration: 2, force: [impulse / (2.0 * nunes::DT), 0.0] };
+        nunes::walk(c.clone(), 600, &rules, &[push], |_| ()).unwrap()
+    };
+    assert!(!run(0.0).fell);
+    assert!(run(400.0).fell, "a 400 N·s forward push");
+    assert!(run(-400.0).fell, "a 400 N·s backward push");
+}

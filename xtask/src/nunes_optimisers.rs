@@ -1,0 +1,373 @@
+//! Beyond the thesis's search (issue: controllers and optimisation):
+//!
+//! * `cargo xtask reproduce nunes-optimisers [--seeds N]`: the thesis's staged greedy search, CMA-ES,
+//!   random search and simulated annealing, each over N seeds (10 by default), searching the walker's
+//!   twelve symmetric leg-pose numbers from the spec's proposal, with which our humanoid falls. Per run:
+//!   evaluations until a walk of 10 m in 50 s without a fall, the best walker's distance in a 10-minute
+//!   run, and the largest push it survives forward and backward. Writes
+//!   `docs/reproduction/nunes-optimisers.md` and a best-fitness-per-evaluation CSV per run under
+//!   `target/nunes/`.
+//! * `cargo xtask reproduce nunes-robust`: CMA-ES on a robust objective (the mean over six pushes of
+//!   ±20 N·s at random times, the same pushes for every candidate: common random numbers) from the
+//!   re-authored walker, written to `assets/controllers/walk-robust.ron`, with the same measurements.
+
+use std::fmt::Write as _;
+
+use anima_control::Controller;
+use anima_control::optimise::{
+    Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Interval, Optimiser, RandomSearch, RunLog,
+    Stage, run,
+};
+use anima_scene::nunes::{self, Push, WalkRules, walk_poses};
+use anyhow::Result;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// Evaluations per optimiser run.
+const BUDGET: usize = 100;
+/// Iterations of one walking evaluation (50 s, the thesis's 1000).
+const WALK_ITERATIONS: u64 = 1000;
+/// A completed evaluation (no fall, no stop, all 1000 iterations) scores this plus its distance; one
+/// that fails scores its distance before the failure (at least −1 m) plus 5 × the fraction survived.
+/// So "walks 10 m in 50 s without falling" is a fitness of at least `COMPLETED + 10`.
+const COMPLETED: f64 = 100.0;
+/// Iterations of the long run: 10 minutes.
+const LONG_ITERATIONS: u64 = 12_000;
+/// Pushes: a horizontal force on the head for `PUSH_ITERATIONS` control steps (0.1 s) from
+/// iteration `PUSH_AT` (20 s into the walk, in a steady gait); survived when the walker is still up
+/// `PUSH_RECOVERY` iterations (10 s) later.
+const PUSH_AT: u64 = 400;
+const PUSH_ITERATIONS: u64 = 2;
+const PUSH_RECOVERY: u64 = 200;
+/// Impulses tried, N·s: 2.5, 5, … up to 100; the largest before the first failure is reported.
+const PUSH_STEP: f64 = 2.5;
+const PUSH_MAX: f64 = 100.0;
+
+/// The shaped walking score (see `COMPLETED`) of `c` under `pushes`.
+fn score(c: Controller, pushes: &[Push]) -> f64 {
+    match nunes::walk(c, WALK_ITERATIONS, &WalkRules::default(), pushes, |_| ()) {
+        Ok(o) if o.iterations == WALK_ITERATIONS && !o.fell && !o.stopped => COMPLETED + o.distance,
+        Ok(o) => o.distance.max(-1.0) + 5.0 * o.iterations as f64 / WALK_ITERATIONS as f64,
+        Err(_) => -1.0,
+    }
+}
+
+fn with_poses(base: &Controller, x: &[f64]) -> Controller {
+    let mut c = base.clone();
+    walk_poses::set(&mut c, x);
+    c
+}
+
+/// The thesis's walker with the spec's proposed leg poses (it falls within seconds).
+pub fn spec_walker() -> Result<Controller> {
+    Ok(with_poses(&nunes::parse(nunes::WALK_RON)?, &walk_poses::SPEC))
+}
+
+/// A push of `impulse` N·s (positive forward) on the head.
+fn push(impulse: f64, at: u64) -> Push {
+    Push { at, duration: PUSH_ITERATIONS, force: [impulse / (PUSH_ITERATIONS as f64 * nunes::DT), 0.0] }
+}
+
+fn survives(c: &Controller, impulse: f64) -> bool {
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    nunes::walk(c.clone(), PUSH_AT + PUSH_RECOVERY, &rules, &[push(impulse, PUSH_AT)], |_| ())
+        .is_ok_and(|o| !o.fell)
+}
+
+/// The largest impulse (N·s, in `direction` ±1) survived before the first failure, in steps of
+/// `PUSH_STEP`; 0 when even the first fails (or the walker falls without a push).
+fn largest_push(c: &Controller, direction: f64) -> f64 {
+    if !survives(c, 0.0) {
+        return 0.0;
+    }
+    let mut j = 0.0;
+    while j + PUSH_STEP <= PUSH_MAX && survives(c, direction * (j + PUSH_STEP)) {
+        j += PUSH_STEP;
+    }
+    j
+}
+
+/// Distance walked in a 10-minute run, stopping at the first fall, and whether it fell.
+fn ten_minutes(c: &Controller) -> (f64, bool) {
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    nunes::walk(c.clone(), LONG_ITERATIONS, &rules, &[], |_| ()).map_or((0.0, true), |o| (o.distance, o.fell))
+}
+
+/// What one optimiser run measured.
+struct Measured {
+    optimiser: &'static str,
+    seed: u64,
+    evaluations: usize,
+    to_ten_metres: Option<usize>,
+    best: f64,
+    ten_minutes: (f64, bool),
+    push: (f64, f64),
+}
+
+fn optimiser(kind: usize, seed: u64) -> Result<(&'static str, Box<dyn Optimiser>)> {
+    let x0 = walk_poses::SPEC.to_vec();
+    let space = walk_poses::space();
+    let all: Vec<usize> = (0..x0.len()).collect();
+    Ok(match kind {
+        0 => (
+            "greedy (thesis)",
+            Box::new(GreedySearch::new(
+                space,
+                vec![
+                    Stage::global("global", all.clone(), BUDGET / 3),
+                    Stage::local_single("single", all, BUDGET - BUDGET / 3, Interval::Fixed),
+                ],
+                x0,
+                seed,
+            )?),
+        ),
+        1 => ("CMA-ES", Box::new(Cmaes::new(space, CmaesConfig::new(x0, 0.2), seed)?)),
+        2 => ("random search", Box::new(RandomSearch::new(space, 4, seed)?)),
+        _ => (
+            "annealing",
+            Box::new(Annealing::new(
+                space,
+                AnnealingConfig { x0, t0: 5.0, cooling: 0.95, step: 0.1, batch: 1 },
+                seed,
+            )?),
+        ),
+    })
+}
+
+fn csv(log: &RunLog) -> String {
+    let mut s = String::from("evaluation,fitness,best\n");
+    let mut best = f64::NEG_INFINITY;
+    for (k, e) in log.evaluations.iter().enumerate() {
+        best = best.max(e.fitness);
+        let _ = writeln!(s, "{},{},{}", k + 1, e.fitness, best);
+    }
+    s
+}
+
+fn one_run(kind: usize, seed: u64) -> Result<Measured> {
+    let base = nunes::parse(nunes::WALK_RON)?;
+    let (name, mut opt) = optimiser(kind, seed)?;
+    let objective = |x: &[f64]| score(with_poses(&base, x), &[]);
+    let mut log = RunLog::default();
+    run(opt.as_mut(), &objective, BUDGET, &mut log);
+    let dir = crate::root().join("target/nunes/optimisers");
+    std::fs::create_dir_all(&dir)?;
+    let slug: String = name.chars().filter(char::is_ascii_alphanumeric).collect();
+    anima::output::write_atomic(&dir.join(format!("{slug}-seed{seed}.csv")), |w| {
+        Ok(w.write_all(csv(&log).as_bytes())?)
+    })?;
+    let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((walk_poses::SPEC.to_vec(), f64::NAN));
+    let to_ten_metres = log.evaluations.iter().position(|e| e.fitness >= COMPLETED + 10.0).map(|i| i + 1);
+    let winner = with_poses(&base, &best.0);
+    let m = Measured {
+        optimiser: name,
+        seed,
+        evaluations: log.len(),
+        to_ten_metres,
+        best: best.1,
+        ten_minutes: ten_minutes(&winner),
+        push: (largest_push(&winner, 1.0), largest_push(&winner, -1.0)),
+    };
+    eprintln!(
+        "xtask:   {name}, seed {seed}: 10 m after {}, best {:.1}, 10 min {:.0} m{}, pushes +{} / −{} N·s",
+        m.to_ten_metres.map_or("never".to_string(), |k| format!("{k} evaluations")),
+        m.best,
+        m.ten_minutes.0,
+        if m.ten_minutes.1 { " (fell)" } else { "" },
+        m.push.0,
+        m.push.1
+    );
+    Ok(m)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// `reproduce nunes-optimisers`.
+pub fn optimisers(seeds: usize) -> Result<String> {
+    let spec = spec_walker()?;
+    let before = nunes::walk(spec.clone(), WALK_ITERATIONS, &WalkRules::default(), &[], |_| ())?;
+    eprintln!(
+        "xtask: the spec's walker: {:.2} m in {} iterations{}",
+        before.distance,
+        before.iterations,
+        if before.fell { ", falls" } else { "" }
+    );
+    let jobs: Vec<(usize, u64)> = (0..4).flat_map(|k| (0..seeds as u64).map(move |s| (k, s))).collect();
+    let results: Vec<Measured> = jobs.par_iter().map(|&(k, s)| one_run(k, s)).collect::<Result<_>>()?;
+    let mut s = String::new();
+    writeln!(s, "# Optimisers compared on the walker\n")?;
+    writeln!(
+        s,
+        "`cargo xtask reproduce nunes-optimisers --seeds {seeds}`. Each optimiser searches the twelve symmetric \
+         leg-pose numbers of `anima_scene::nunes::walk_poses` (E1/E3 by swing and stance leg, E4/E6 mirrored) \
+         from the spec's §8.1.2 proposal, with which our humanoid falls ({:.2} m, {} of 1000 iterations), for \
+         {BUDGET} evaluations per run, seeds 0–{}. The score of an evaluation is {COMPLETED} + the distance for a \
+         completed 50 s walk (1000 iterations, no fall, no stop), else the distance before the failure plus 5 × \
+         the fraction survived, so every optimiser sees a slope towards walking. Settings: greedy = the thesis's \
+         two stages ({} global draws, then one-parameter draws over the whole interval); CMA-ES σ₀ = 0.2 of each \
+         interval, default λ; random search in batches of 4; annealing T₀ = 5, cooling 0.95, steps of 0.1 of each \
+         interval.\n",
+        before.distance,
+        before.iterations,
+        seeds - 1,
+        BUDGET / 3
+    )?;
+    writeln!(
+        s,
+        "Measured on the best walker of each run: the distance of a 10-minute run (12 000 iterations, stopped at \
+         the first fall) and the largest push survived, forward and backward: a horizontal force on the head for \
+         0.1 s from 20 s into the walk, in steps of {PUSH_STEP} N·s up to the first impulse it does not survive \
+         (still up 10 s later).\n"
+    )?;
+    writeln!(
+        s,
+        "| optimiser | runs reaching 10 m in 50 s | evaluations to 10 m (median of those) | best 50 s distance (median, m) | 10-minute distance (median, m) | runs that walk 10 minutes | push forward (median, N·s) | push backward (median, N·s) |"
+    )?;
+    writeln!(s, "|---|---|---|---|---|---|---|---|")?;
+    for name in ["greedy (thesis)", "CMA-ES", "random search", "annealing"] {
+        let rs: Vec<&Measured> = results.iter().filter(|r| r.optimiser == name).collect();
+        let reached: Vec<f64> = rs.iter().filter_map(|r| r.to_ten_metres.map(|k| k as f64)).collect();
+        let best50 = median(rs.iter().map(|r| (r.best - COMPLETED).max(0.0)).collect());
+        writeln!(
+            s,
+            "| {name} | {} / {} | {} | {:.1} | {:.0} | {} / {} | {:.1} | {:.1} |",
+            reached.len(),
+            rs.len(),
+            if reached.is_empty() { "—".to_string() } else { format!("{:.0}", median(reached.clone())) },
+            best50,
+            median(rs.iter().map(|r| r.ten_minutes.0).collect()),
+            rs.iter().filter(|r| !r.ten_minutes.1).count(),
+            rs.len(),
+            median(rs.iter().map(|r| r.push.0).collect()),
+            median(rs.iter().map(|r| r.push.1).collect()),
+        )?;
+    }
+    writeln!(s, "\nEvery run:\n")?;
+    writeln!(
+        s,
+        "| optimiser | seed | evaluations | to 10 m | best score | 10 minutes (m) | push forward / backward (N·s) |"
+    )?;
+    writeln!(s, "|---|---|---|---|---|---|---|")?;
+    for r in &results {
+        writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.2} | {:.0}{} | {} / {} |",
+            r.optimiser,
+            r.seed,
+            r.evaluations,
+            r.to_ten_metres.map_or("never".to_string(), |k| k.to_string()),
+            r.best,
+            r.ten_minutes.0,
+            if r.ten_minutes.1 { " (fell)" } else { "" },
+            r.push.0,
+            r.push.1
+        )?;
+    }
+    writeln!(
+        s,
+        "\nThe best-so-far score of every run is in `target/nunes/optimisers/<optimiser>-seed<k>.csv`.\n"
+    )?;
+    let path = crate::root().join("docs/reproduction/nunes-optimisers.md");
+    anima::output::write_atomic(&path, |w| Ok(w.write_all(s.as_bytes())?))?;
+    eprintln!("xtask: wrote {}", path.display());
+    Ok(s)
+}
+
+/// `reproduce nunes-robust`: CMA-ES on the mean score over six pushes (common random numbers).
+pub fn robust() -> Result<String> {
+    const PUSHES: usize = 6;
+    const IMPULSE: f64 = 20.0;
+    const ROBUST_BUDGET: usize = 150;
+    let base = nunes::parse(nunes::WALK_RON)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(crate::nunes::SEED);
+    let pushes: Vec<Push> = (0..PUSHES)
+        .map(|k| {
+            let at = rng.random_range(200..800);
+            push(if k % 2 == 0 { IMPULSE } else { -IMPULSE }, at)
+        })
+        .collect();
+    let objective = |x: &[f64]| {
+        let c = with_poses(&base, x);
+        pushes.iter().map(|p| score(c.clone(), std::slice::from_ref(p))).sum::<f64>() / PUSHES as f64
+    };
+    let x0: Vec<f64> = {
+        // The re-authored walker's own numbers, read back from the controller.
+        let ids = walk_poses::NAMES.len();
+        let probe = |label: &str| base.param(base.param_id(label).expect("walker parameter"));
+        let v = [
+            probe("W-LEGS/E1/waist"),
+            probe("W-LEGS/E1/hip_l"),
+            probe("W-LEGS/E1/knee_l"),
+            probe("W-LEGS/E1/ankle_l"),
+            probe("W-LEGS/E1/hip_r"),
+            probe("W-LEGS/E1/knee_r"),
+            probe("W-LEGS/E1/ankle_r"),
+            probe("W-LEGS/E3/hip_l"),
+            probe("W-LEGS/E3/knee_l"),
+            probe("W-LEGS/E3/ankle_l"),
+            probe("W-LEGS/E3/hip_r"),
+            probe("W-LEGS/E3/ankle_r"),
+        ];
+        debug_assert_eq!(v.len(), ids);
+        v.iter().zip(walk_poses::LO.iter().zip(walk_poses::HI)).map(|(&x, (&lo, hi))| x.clamp(lo, hi)).collect()
+    };
+    let start = with_poses(&base, &x0);
+    let f0 = objective(&x0);
+    eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
+    let mut cfg = CmaesConfig::new(x0.clone(), 0.1);
+    cfg.restarts = 0;
+    let mut opt = Cmaes::new(walk_poses::space(), cfg, crate::nunes::SEED)?;
+    let mut log = RunLog::default();
+    while log.len() < ROBUST_BUDGET {
+        let before = log.len();
+        run(&mut opt, &objective, before + 1, &mut log);
+        if log.len() == before {
+            break;
+        }
+        eprintln!("xtask:   CMA-ES robust: {} evaluations, best {:.2}", log.len(), log.best().map_or(f64::NAN, |e| e.fitness));
+    }
+    let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((x0.clone(), f0));
+    let winner = with_poses(&base, &best.0);
+    let path = crate::root().join("assets/controllers/walk-robust.ron");
+    let text = format!(
+        "// Written by `cargo xtask reproduce nunes-robust`: walk.ron with its twelve symmetric leg-pose numbers\n\
+         // (anima_scene::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{IMPULSE} N·s head\n\
+         // pushes at random times (common random numbers, seed {}).\n{}",
+        crate::nunes::SEED,
+        winner.to_ron()
+    );
+    anima::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    let mut s = String::new();
+    writeln!(s, "## A walker optimised for pushes (CMA-ES, robust objective)\n")?;
+    writeln!(
+        s,
+        "`cargo xtask reproduce nunes-robust`: CMA-ES (σ₀ = 0.1 of each interval, no restarts, {} evaluations) \
+         over the twelve leg-pose numbers from the re-authored walker, maximising the mean score over six pushes \
+         of ±{IMPULSE} N·s on the head (0.1 s, at iterations {}) — the same six for every candidate (common \
+         random numbers). The winner is `assets/controllers/walk-robust.ron`.\n",
+        log.len(),
+        pushes.iter().map(|p| format!("{}{}", if p.force[0] > 0.0 { "+" } else { "−" }, p.at)).collect::<Vec<_>>().join(", ")
+    )?;
+    writeln!(s, "| walker | robust score | 10-minute distance (m) | largest push forward / backward (N·s) |")?;
+    writeln!(s, "|---|---|---|---|")?;
+    for (name, c, f) in [("walk.ron (re-authored)", &start, f0), ("walk-robust.ron (CMA-ES)", &winner, best.1)] {
+        let (d, fell) = ten_minutes(c);
+        writeln!(
+            s,
+            "| {name} | {f:.2} | {d:.0}{} | {} / {} |",
+            if fell { " (fell)" } else { "" },
+            largest_push(c, 1.0),
+            largest_push(c, -1.0)
+        )?;
+    }
+    writeln!(s)?;
+    Ok(s)
+}
