@@ -76,7 +76,9 @@ fn main() -> Result<()> {
             Some(which) => oliveira_adaptive::reproduce(which),
             None => anyhow::bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
         },
-        Command::Reproduce { experiment, friction, seeds, .. } => reproduce::run(&experiment, &friction, seeds),
+        Command::Reproduce { experiment, friction, seeds, .. } => {
+            reproduce::run(&experiment, &friction, seeds)
+        }
         Command::Figures { only } => figures::run(only.as_deref()),
         Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
     }

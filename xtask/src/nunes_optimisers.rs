@@ -317,7 +317,10 @@ pub fn robust() -> Result<String> {
             probe("W-LEGS/E3/ankle_r"),
         ];
         debug_assert_eq!(v.len(), ids);
-        v.iter().zip(walk_poses::LO.iter().zip(walk_poses::HI)).map(|(&x, (&lo, hi))| x.clamp(lo, hi)).collect()
+        v.iter()
+            .zip(walk_poses::LO.iter().zip(walk_poses::HI))
+            .map(|(&x, (&lo, hi))| x.clamp(lo, hi))
+            .collect()
     };
     let start = with_poses(&base, &x0);
     let f0 = objective(&x0);
@@ -332,7 +335,11 @@ pub fn robust() -> Result<String> {
         if log.len() == before {
             break;
         }
-        eprintln!("xtask:   CMA-ES robust: {} evaluations, best {:.2}", log.len(), log.best().map_or(f64::NAN, |e| e.fitness));
+        eprintln!(
+            "xtask:   CMA-ES robust: {} evaluations, best {:.2}",
+            log.len(),
+            log.best().map_or(f64::NAN, |e| e.fitness)
+        );
     }
     let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((x0.clone(), f0));
     let winner = with_poses(&base, &best.0);
@@ -354,11 +361,20 @@ pub fn robust() -> Result<String> {
          of ±{IMPULSE} N·s on the head (0.1 s, at iterations {}) — the same six for every candidate (common \
          random numbers). The winner is `assets/controllers/walk-robust.ron`.\n",
         log.len(),
-        pushes.iter().map(|p| format!("{}{}", if p.force[0] > 0.0 { "+" } else { "−" }, p.at)).collect::<Vec<_>>().join(", ")
+        pushes
+            .iter()
+            .map(|p| format!("{}{}", if p.force[0] > 0.0 { "+" } else { "−" }, p.at))
+            .collect::<Vec<_>>()
+            .join(", ")
     )?;
-    writeln!(s, "| walker | robust score | 10-minute distance (m) | largest push forward / backward (N·s) |")?;
+    writeln!(
+        s,
+        "| walker | robust score | 10-minute distance (m) | largest push forward / backward (N·s) |"
+    )?;
     writeln!(s, "|---|---|---|---|")?;
-    for (name, c, f) in [("walk.ron (re-authored)", &start, f0), ("walk-robust.ron (CMA-ES)", &winner, best.1)] {
+    for (name, c, f) in
+        [("walk.ron (re-authored)", &start, f0), ("walk-robust.ron (CMA-ES)", &winner, best.1)]
+    {
         let (d, fell) = ten_minutes(c);
         writeln!(
             s,

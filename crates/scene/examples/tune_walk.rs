@@ -4,8 +4,8 @@
 //! numbers were then written into `assets/controllers/walk.ron` by hand.
 //!
 //! `cargo run --release -p anima-scene --example tune_walk -- [evaluations] [iterations]`
-use anima_control::optimise::{Cmaes, CmaesConfig, RunLog, run};
 use anima_control::Selection;
+use anima_control::optimise::{Cmaes, CmaesConfig, RunLog, run};
 use anima_scene::nunes::walk_poses::{self, set as set_poses};
 use anima_scene::nunes::{self, WalkRules};
 

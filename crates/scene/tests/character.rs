@@ -149,3 +149,64 @@ fn a_hard_push_on_the_head_knocks_the_walker_down() {
     assert!(run(400.0).fell, "a 400 N·s forward push");
     assert!(run(-400.0).fell, "a 400 N·s backward push");
 }
+
+#[test]
+fn the_symmetric_walker_copies_its_thresholds_on_e1() {
+    // Variant A (spec §8.1.7): E1's procedure copies p2 → p5 and p3 → p6, so only p2 and p3 are
+    // free. Without the procedure (walk.ron) p5 and p6 keep their own values.
+    for (text, copies) in [(nunes::WALK_SYMMETRIC_RON, true), (nunes::WALK_RON, false)] {
+        let mut c = nunes::parse(text).unwrap();
+        let id = |c: &anima_control::Controller, l: &str| c.param_id(l).unwrap();
+        let (p2, p3, p5, p6) =
+            (id(&c, "W-LEGS/T2/p0"), id(&c, "W-LEGS/T3/p0"), id(&c, "W-LEGS/T5/p0"), id(&c, "W-LEGS/T6/p0"));
+        c.set_param(p2, 0.4);
+        c.set_param(p3, 0.1);
+        let free =
+            c.free_params(&anima_control::Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+        assert_eq!(free.len(), if copies { 2 } else { 4 });
+        let mut seen = (f64::NAN, f64::NAN);
+        nunes::walk(c, 10, &WalkRules::default(), &[], |ch| {
+            seen = (ch.controller.param(p5), ch.controller.param(p6))
+        })
+        .unwrap();
+        if copies {
+            assert_eq!(seen, (0.4, 0.1));
+        } else {
+            assert_eq!(seen, (0.25, 0.25));
+        }
+    }
+}
+
+#[test]
+fn the_temporal_walker_changes_state_on_time_alone() {
+    // Variant B (spec §8.1.8): T2, T3, T5, T6 are temporal, so every visit to E2 lasts as long as
+    // T2 says, whatever the body does; changing T2 changes every such visit by the same amount.
+    let visits = |t2: f64| {
+        let mut c = nunes::parse(nunes::WALK_TEMPORAL_RON).unwrap();
+        c.set_param(c.param_id("W-LEGS/T2/time").unwrap(), t2);
+        let legs = c.machine_index("W-LEGS").unwrap();
+        let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
+        let mut states = Vec::new();
+        nunes::walk(c, 400, &rules, &[], |ch| states.push(ch.controller.machines()[legs].current_state()))
+            .unwrap();
+        // Lengths of the complete runs of E2 (state index 1).
+        let mut lengths = Vec::new();
+        let mut run = 0;
+        for w in states.windows(2) {
+            if w[1] == Some(1) {
+                run += 1;
+            } else if w[0] == Some(1) {
+                lengths.push(run);
+                run = 0;
+            }
+        }
+        // The first visit is one iteration shorter than the rest (measured: 11 then 12s for T2 = 12);
+        // compare the steady ones.
+        lengths.split_off(1)
+    };
+    let (short, long) = (visits(12.0), visits(18.0));
+    assert!(short.len() >= 3 && long.len() >= 3, "{short:?} {long:?}");
+    assert!(short.iter().all(|&l| l == short[0]), "{short:?}");
+    assert!(long.iter().all(|&l| l == long[0]), "{long:?}");
+    assert_eq!(long[0] - short[0], 6, "{short:?} {long:?}");
+}
