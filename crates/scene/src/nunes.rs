@@ -10,6 +10,8 @@ use crate::character::{Character, CharacterError, procedures};
 /// The shipped controllers, embedded so tests and tools need no paths.
 pub const WALK_RON: &str = include_str!("../../../assets/controllers/walk.ron");
 pub const WALK_OPTIMISED_RON: &str = include_str!("../../../assets/controllers/walk-optimised.ron");
+/// The walker CMA-ES optimised for pushes (`cargo xtask reproduce nunes-robust`).
+pub const WALK_ROBUST_RON: &str = include_str!("../../../assets/controllers/walk-robust.ron");
 /// The thesis's variant A: symmetric thresholds by a procedure on E1 (spec §8.1.7).
 pub const WALK_SYMMETRIC_RON: &str = include_str!("../../../assets/controllers/walk-symmetric.ron");
 /// The thesis's variant B: temporal instead of sensory transitions (spec §8.1.8).

@@ -210,3 +210,16 @@ fn the_temporal_walker_changes_state_on_time_alone() {
     assert!(long.iter().all(|&l| l == long[0]), "{long:?}");
     assert_eq!(long[0] - short[0], 6, "{short:?} {long:?}");
 }
+
+#[test]
+fn the_robust_walker_survives_20_n_s_pushes_both_ways() {
+    // The goal beyond the thesis: the CMA-ES walker (nunes-robust) stays up 10 s after a 20 N·s push
+    // on the head, forward and backward, 20 s into its walk.
+    let c = nunes::parse(nunes::WALK_ROBUST_RON).unwrap();
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    for impulse in [20.0, -20.0] {
+        let push = nunes::Push { at: 400, duration: 2, force: [impulse / (2.0 * nunes::DT), 0.0] };
+        let out = nunes::walk(c.clone(), 600, &rules, &[push], |_| ()).unwrap();
+        assert!(!out.fell && out.distance > 10.0, "{impulse} N·s: {out:?}");
+    }
+}
