@@ -289,6 +289,18 @@ pub mod catalogue {
         s.joint_angle[waist_joint]
     }
 
+    /// d of SIMBICON-style feedback: how far the centre of mass is ahead of foot `side`'s centre,
+    /// m, in the facing direction (0 for a model without that foot). Continuous, not a switch.
+    pub fn com_offset(s: &Sensors, side: usize) -> f64 {
+        s.layout.feet[side].map_or(0.0, |f| s.facing * (s.com[0] - s.body_position[f][0]))
+    }
+
+    /// v of SIMBICON-style feedback: the centre of mass's horizontal speed in the facing direction,
+    /// m/s. Continuous, not a switch.
+    pub fn com_speed(s: &Sensors) -> f64 {
+        s.facing * s.com_velocity[0]
+    }
+
     /// S-FOOTUP(f): 1 if foot `side` (0 left, 1 right) has no ground contact.
     pub fn foot_up(s: &Sensors, side: usize) -> f64 {
         on(s.layout.feet[side].is_some_and(|f| !s.on_ground[f]))

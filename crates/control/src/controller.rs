@@ -34,11 +34,18 @@ pub enum MachineType {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum PoseTarget {
     Angle(ParamId, Frame),
+    /// θ₀ + Σ gainᵢ · sensorᵢ over `Controller::feedback[start..start + len]`.
+    Feedback {
+        base: ParamId,
+        frame: Frame,
+        start: u32,
+        len: u32,
+    },
     NoTorque,
     DampingOnly,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct PoseItem {
     actuator: usize,
     target: PoseTarget,
@@ -247,6 +254,8 @@ pub struct Controller {
     values: Vec<f64>,
     file_values: Vec<f64>,
     sensors: Vec<Sensor>,
+    /// The terms of every feedback target: (gain, sensor).
+    feedback: Vec<(ParamId, usize)>,
     machine_sensors: Vec<MachineSensor>,
     machines: Vec<Machine>,
     constant: Vec<usize>,
@@ -356,6 +365,7 @@ impl Controller {
 
         // The sensor set first: machine sensors keep indices 0..k in `sensors`.
         let mut sensors = Vec::new();
+        let mut feedback: Vec<(ParamId, usize)> = Vec::new();
         let mut machine_sensors = Vec::new();
         if let Some((i, n)) = duplicate(desc.sensors.iter().map(|s| s.name.as_str())) {
             return Err(inv(format!("sensors[{i}].name"), format!("a second sensor named `{n}`")));
@@ -494,6 +504,58 @@ impl Controller {
                             b.param(p, ParamKind::TargetAngle, path, label, owner, auto)?,
                             Frame::World,
                         ),
+                        TargetDesc::Feedback(fd) => {
+                            let base = b.param(
+                                &fd.base,
+                                ParamKind::TargetAngle,
+                                format!("{path}.base"),
+                                label.clone(),
+                                owner,
+                                auto,
+                            )?;
+                            let start = feedback.len();
+                            for (i, term) in fd.terms.iter().enumerate() {
+                                let tpath = format!("{path}.terms[{i}]");
+                                if term.sensor.kind.is_empty() {
+                                    return Err(inv(
+                                        format!("{tpath}.sensor.kind"),
+                                        "a sensor needs a kind (the computation to run)",
+                                    ));
+                                }
+                                let gain = b.param(
+                                    &term.gain,
+                                    ParamKind::FeedbackGain,
+                                    format!("{tpath}.gain"),
+                                    format!("{label}/k{i}"),
+                                    owner,
+                                    auto,
+                                )?;
+                                let first = b.values.len();
+                                for (j, p) in term.sensor.params.iter().enumerate() {
+                                    b.param(
+                                        p,
+                                        ParamKind::SensorParam,
+                                        format!("{tpath}.sensor.params[{j}]"),
+                                        format!("{label}/k{i}/p{j}"),
+                                        owner,
+                                        auto,
+                                    )?;
+                                }
+                                sensors.push(Sensor {
+                                    name: format!("{label}/k{i}"),
+                                    kind: term.sensor.kind.clone(),
+                                    args: term.sensor.args.clone(),
+                                    params: first..b.values.len(),
+                                });
+                                feedback.push((gain, sensors.len() - 1));
+                            }
+                            PoseTarget::Feedback {
+                                base,
+                                frame: if fd.world { Frame::World } else { Frame::Parent },
+                                start: start as u32,
+                                len: fd.terms.len() as u32,
+                            }
+                        }
                         TargetDesc::NoTorque => PoseTarget::NoTorque,
                         TargetDesc::DampingOnly => PoseTarget::DampingOnly,
                     };
@@ -622,6 +684,7 @@ impl Controller {
             file_values: b.values.clone(),
             values: b.values,
             sensors,
+            feedback,
             machine_sensors,
             machines,
             constant,
@@ -838,6 +901,22 @@ impl Controller {
         self.values[id.0].max(0.0) as u32
     }
 
+    /// The angle an angle or feedback target asks for now, and its frame.
+    fn pose_angle<E: SensorInput>(&self, target: PoseTarget, env: &mut E) -> (f64, Frame) {
+        match target {
+            PoseTarget::Angle(p, frame) => (self.values[p.0], frame),
+            PoseTarget::Feedback { base, frame, start, len } => {
+                let terms = &self.feedback[start as usize..(start + len) as usize];
+                let sum: f64 = terms
+                    .iter()
+                    .map(|&(gain, sensor)| self.values[gain.0] * env.sensor(&self.query(sensor)))
+                    .sum();
+                (self.values[base.0] + sum, frame)
+            }
+            PoseTarget::NoTorque | PoseTarget::DampingOnly => (0.0, Frame::Parent),
+        }
+    }
+
     fn query(&self, sensor: usize) -> SensorQuery<'_> {
         let s = &self.sensors[sensor];
         SensorQuery {
@@ -956,8 +1035,8 @@ impl Controller {
         let alpha = if blend { f64::from(rt.n) / f64::from(rt.d_in) } else { 1.0 };
         for (e, item) in mach.poses[mach.states[s].pose].iter().enumerate() {
             let (target, frame) = match item.target {
-                PoseTarget::Angle(p, frame) => {
-                    let new = self.values[p.0];
+                PoseTarget::Angle(..) | PoseTarget::Feedback { .. } => {
+                    let (new, frame) = self.pose_angle(item.target, env);
                     let prev = if blend { find_prev(&rt.prev, item.actuator, e) } else { None };
                     let a = match prev {
                         Some(PrevEntry { angle: Some(old), frame: f, .. }) if f == frame => {
@@ -1012,20 +1091,26 @@ impl Controller {
     /// next state. An entry that was NoTorque/DampingOnly, or in another frame, and becomes an angle
     /// starts from the measured angle (spec §6.5).
     fn snapshot<E: SensorInput>(&mut self, m: usize, s: usize, next: usize, env: &mut E) {
-        let values = &self.values;
-        let mach = &mut self.machines[m];
-        let rt = &mut mach.rt;
-        rt.prev.clear();
-        for item in &mach.poses[mach.states[s].pose] {
-            rt.prev.push(match item.target {
-                PoseTarget::Angle(p, frame) => {
-                    PrevEntry { actuator: item.actuator, angle: Some(values[p.0]), frame }
+        let pose = self.machines[m].states[s].pose;
+        self.machines[m].rt.prev.clear();
+        for k in 0..self.machines[m].poses[pose].len() {
+            let item = self.machines[m].poses[pose][k];
+            let entry = match item.target {
+                PoseTarget::Angle(..) | PoseTarget::Feedback { .. } => {
+                    let (angle, frame) = self.pose_angle(item.target, env);
+                    PrevEntry { actuator: item.actuator, angle: Some(angle), frame }
                 }
                 _ => PrevEntry { actuator: item.actuator, angle: None, frame: Frame::Parent },
-            });
+            };
+            self.machines[m].rt.prev.push(entry);
         }
+        let mach = &mut self.machines[m];
+        let rt = &mut mach.rt;
         for item in &mach.poses[mach.states[next].pose] {
-            let PoseTarget::Angle(_, frame) = item.target else { continue };
+            let frame = match item.target {
+                PoseTarget::Angle(_, frame) | PoseTarget::Feedback { frame, .. } => frame,
+                _ => continue,
+            };
             let Some(prev) = rt.prev.iter_mut().find(|p| p.actuator == item.actuator) else { continue };
             if prev.angle.is_none() || prev.frame != frame {
                 prev.angle = env.actuator_angle(item.actuator, frame);
@@ -1055,8 +1140,16 @@ fn for_each_param_mut(desc: &mut ControllerDesc, f: &mut impl FnMut(&mut Param))
                 continue;
             }
             for e in &mut s.pose {
-                if let TargetDesc::Angle(p) | TargetDesc::WorldAngle(p) = &mut e.1 {
-                    f(p);
+                match &mut e.1 {
+                    TargetDesc::Angle(p) | TargetDesc::WorldAngle(p) => f(p),
+                    TargetDesc::Feedback(fd) => {
+                        f(&mut fd.base);
+                        for t in &mut fd.terms {
+                            f(&mut t.gain);
+                            t.sensor.params.iter_mut().for_each(&mut *f);
+                        }
+                    }
+                    TargetDesc::NoTorque | TargetDesc::DampingOnly => {}
                 }
             }
         }

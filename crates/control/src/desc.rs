@@ -147,17 +147,44 @@ pub struct StateDesc {
 pub struct PoseEntry(pub ActuatorRef, pub TargetDesc);
 
 /// What a pose asks of one actuator (spec §4.5).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum TargetDesc {
     /// Joint angle (child relative to parent), rad.
     Angle(Param),
     /// The child body's angle in the world, rad (an extension for SIMBICON-like balance; the thesis
     /// uses joint angles only).
     WorldAngle(Param),
+    /// A balance-feedback target, θ₀ + Σ gainᵢ · sensorᵢ, evaluated every iteration (an anima
+    /// extension for SIMBICON-style control: e.g. the swing hip's world angle θ₀ + c_d·d + c_v·v with
+    /// d, v the centre of mass's offset from and speed over the stance foot).
+    Feedback(FeedbackDesc),
     /// Apply no torque for this pose.
     NoTorque,
     /// Damping only (hold the current angle).
     DampingOnly,
+}
+
+/// A feedback target: `Feedback((base: 0.3, world: true, terms: [(gain: 0.5, sensor: (kind:
+/// "com_offset", args: ["right"]))]))`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedbackDesc {
+    /// θ₀, rad.
+    pub base: Param,
+    /// The target is the child body's angle in the world (as [`TargetDesc::WorldAngle`]) rather than
+    /// the joint angle.
+    #[serde(default)]
+    pub world: bool,
+    pub terms: Vec<FeedbackTerm>,
+}
+
+/// One term of a feedback target: a gain times a sensor's return value.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedbackTerm {
+    pub gain: Param,
+    /// A continuous sensor (its value is used, not only whether it is non-zero).
+    pub sensor: SensorDesc,
 }
 
 /// An actuator by name (from the controller's `actuators` list) or by 0-based index.

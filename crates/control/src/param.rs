@@ -112,6 +112,8 @@ pub enum ParamKind {
     SensorParam,
     /// A machine sensor's oscillation delay (hold-off), whole iterations ≥ 0.
     OscillationDelay,
+    /// A gain of a feedback target (θ₀ + Σ gainᵢ · sensorᵢ); any sign.
+    FeedbackGain,
 }
 
 impl ParamKind {
@@ -122,7 +124,7 @@ impl ParamKind {
 
     /// Kinds that cannot be negative.
     pub fn is_non_negative(self) -> bool {
-        !matches!(self, Self::TargetAngle | Self::SensorParam)
+        !matches!(self, Self::TargetAngle | Self::SensorParam | Self::FeedbackGain)
     }
 }
 

@@ -77,6 +77,13 @@ enum Binding {
         model: usize,
         joint: usize,
     },
+    ComOffset {
+        model: usize,
+        side: usize,
+    },
+    ComSpeed {
+        model: usize,
+    },
     /// Always 0 (a sensor the adapter was told to ignore).
     Never,
 }
@@ -136,6 +143,8 @@ impl SensorInput for BodyEnv {
             Binding::BothFeetDown { model } => catalogue::both_feet_down(&s[model]),
             Binding::CogLow { model } => catalogue::cog_low(&s[model], param(q.params, 0)),
             Binding::TrunkAngle { model, joint } => catalogue::trunk_angle(&s[model], joint),
+            Binding::ComOffset { model, side } => catalogue::com_offset(&s[model], side),
+            Binding::ComSpeed { model } => catalogue::com_speed(&s[model]),
             Binding::Never => 0.0,
         }
     }
@@ -254,6 +263,8 @@ impl Character {
                         world.skeleton(model)?.joint_index("waist").ok_or_else(|| err("no `waist` joint"))?;
                     Binding::TrunkAngle { model, joint }
                 }
+                "com_offset" => Binding::ComOffset { model, side: side()? },
+                "com_speed" => Binding::ComSpeed { model },
                 "never" => Binding::Never,
                 other => return Err(err(&format!("unknown sensor kind `{other}`"))),
             };

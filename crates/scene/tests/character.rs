@@ -223,3 +223,28 @@ fn the_robust_walker_survives_20_n_s_pushes_both_ways() {
         assert!(!out.fell && out.distance > 10.0, "{impulse} N·s: {out:?}");
     }
 }
+
+#[test]
+fn feedback_targets_read_the_centre_of_mass_sensors() {
+    // A SIMBICON-style target on the humanoid: θ₀ + c_d·d + c_v·v with d = com_offset (ahead of the
+    // right foot) and v = com_speed, both from the body catalogue, in the world frame.
+    let text = r#"Controller(name: "f", actuators: ["hip_l"], machines: [Machine(name: "M", kind: Constant,
+        states: [State(name: "E1", pose: [("hip_l", Feedback((base: 0.1, world: true, terms: [
+            (gain: 2.0, sensor: (kind: "com_offset", args: ["right"])),
+            (gain: 3.0, sensor: (kind: "com_speed")),
+        ])))])],
+        transitions: [Transition(when: Method)])])"#;
+    let mut ch = nunes::humanoid_character(nunes::parse(text).unwrap()).unwrap();
+    let mut moved = false;
+    for _ in 0..20 {
+        let s = ch.env.sensors[0].clone();
+        ch.step().unwrap();
+        let want = 0.1 + 2.0 * catalogue::com_offset(&s, 1) + 3.0 * catalogue::com_speed(&s);
+        let sig = ch.env.world.commands(0).unwrap().signals()[0];
+        assert_eq!(sig.frame, TargetFrame::World);
+        let Target::Angle(got) = sig.target else { panic!("{sig:?}") };
+        assert!((got - want).abs() < 1e-12, "{got} against {want}");
+        moved |= (want - 0.1).abs() > 1e-3;
+    }
+    assert!(moved, "the sensors never moved the target");
+}

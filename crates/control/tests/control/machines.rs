@@ -352,3 +352,62 @@ fn the_step_does_not_allocate_target_storage() {
     }
     assert_eq!((t.signals().as_ptr(), t.capacity()), (ptr, cap), "targets storage was reallocated");
 }
+
+const FEEDBACK: &str = r#"Controller(
+    name: "simbicon",
+    actuators: ["swing_hip"],
+    machines: [Machine(
+        name: "M", kind: Constant,
+        states: [State(name: "E1", pose: [("swing_hip", Feedback((
+            base: 0.5,
+            world: true,
+            terms: [
+                (gain: (value: 0.3, min: 0.0, max: 1.0), sensor: (kind: "com_offset", args: ["right"])),
+                (gain: -0.2, sensor: (kind: "com_speed")),
+            ],
+        )))])],
+        transitions: [Transition(when: Method)],
+    )],
+)"#;
+
+#[test]
+fn a_feedback_target_is_its_base_plus_gains_times_sensors_every_iteration() {
+    // SIMBICON-style: θ = θ₀ + c_d·d + c_v·v with d, v read from the sensor input each iteration.
+    let mut c = build(FEEDBACK);
+    let mut input = script(|kind, k| match kind {
+        "com_offset" => 0.1 * k as f64,
+        "com_speed" => 1.0 - 0.5 * k as f64,
+        _ => 0.0,
+    });
+    let a: Vec<f64> = angles(&mut c, &mut input, 4, 0).into_iter().map(Option::unwrap).collect();
+    for (k, got) in a.iter().enumerate() {
+        let k = k as f64;
+        let want = 0.5 + 0.3 * (0.1 * k) - 0.2 * (1.0 - 0.5 * k);
+        assert!((got - want).abs() < 1e-12, "iteration {k}: {got} against {want}");
+    }
+    let procs = Procedures::new();
+    let mut t = c.new_targets();
+    c.step(&mut input, &procs, &mut t);
+    assert_eq!(t.signals()[0].frame, Frame::World);
+    // The gains are parameters: c_d free (it has an interval), c_v fixed.
+    let free = c.free_params(&anima_control::Selection::all());
+    let labels: Vec<&str> = free.iter().map(|&i| c.params()[i.0].label.as_str()).collect();
+    assert_eq!(labels, ["M/E1/swing_hip/k0"]);
+    c.set_param(free[0], 0.0);
+    let mut again = script(|kind, _| if kind == "com_speed" { 2.0 } else { 5.0 });
+    let a = angles(&mut c, &mut again, 1, 0)[0].unwrap();
+    assert!((a - (0.5 - 0.4)).abs() < 1e-12, "{a}");
+}
+
+#[test]
+fn feedback_targets_survive_a_round_trip_and_name_a_missing_sensor_kind() {
+    let c = build(FEEDBACK);
+    let back = build(&c.to_ron());
+    assert_eq!(back.params().len(), c.params().len());
+    let bad = FEEDBACK.replace(r#"(kind: "com_speed")"#, r#"(kind: "")"#);
+    let err = Controller::from_ron(&bad, &Procedures::<()>::new()).unwrap_err().to_string();
+    assert!(err.contains("terms[1].sensor.kind"), "{err}");
+    let typo = FEEDBACK.replace("gain: -0.2", "gian: -0.2");
+    let err = Controller::from_ron(&typo, &Procedures::<()>::new()).unwrap_err().to_string();
+    assert!(err.contains("gian") && err.contains("line"), "{err}");
+}
