@@ -27,7 +27,7 @@ fn main() {
         let (a, p) = (&ch.env.sensors[0], &ch.env.sensors[1]);
         let st: Vec<String> =
             ch.controller.machines().iter().map(|m| format!("{:?}", m.current_state())).collect();
-        if k % 5 == 0 {
+        if k % 5 == 0 || std::env::var("EVERY").is_ok() {
             eprintln!(
                 "{k:4} P pelvis ({:.2},{:.2}) ang {:.2} pg {:?} | A pelvis ({:.2},{:.2}) abd ang {:.2} w {:.2} com v ({:.2},{:.2}) feet y {:.2} {:.2} pusher hands ({:.2},{:.2}) {} ground {:?}",
                 p.body_position[3][0],

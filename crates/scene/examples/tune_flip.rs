@@ -76,6 +76,29 @@ const GENES: &[Gene] = &[
     g(&["B-ACRO-BODY/E8/acrobat/ankle_l", "B-ACRO-BODY/E8/acrobat/ankle_r"], -0.3, 0.6),
 ];
 
+/// `TUNE_GENES=stand`: only the landing (acrobat E8, with SIMBICON-style feedback on the trunk and
+/// ankles) and the pusher's recovery (E4), for a controller whose E8 and pusher E4 use `Feedback`.
+const STAND_GENES: &[Gene] = &[
+    g(&["B-ACRO-BODY/E8/acrobat/waist"], -0.8, 0.4),
+    g(&["B-ACRO-BODY/E8/acrobat/waist/k0"], -3.0, 3.0),
+    g(&["B-ACRO-BODY/E8/acrobat/waist/k1"], -3.0, 3.0),
+    g(&["B-ACRO-BODY/E8/acrobat/spine"], -0.6, 0.4),
+    g(&["B-ACRO-BODY/E8/acrobat/hip_l", "B-ACRO-BODY/E8/acrobat/hip_r"], -0.6, 1.2),
+    g(&["B-ACRO-BODY/E8/acrobat/knee_l", "B-ACRO-BODY/E8/acrobat/knee_r"], -1.0, 0.0),
+    g(&["B-ACRO-BODY/E8/acrobat/ankle_l", "B-ACRO-BODY/E8/acrobat/ankle_r"], -0.3, 0.6),
+    g(&["B-ACRO-BODY/E8/acrobat/ankle_l/k0", "B-ACRO-BODY/E8/acrobat/ankle_r/k0"], -3.0, 3.0),
+    g(&["B-ACRO-BODY/E8/acrobat/ankle_l/k1", "B-ACRO-BODY/E8/acrobat/ankle_r/k1"], -3.0, 3.0),
+    g(&["B-PUSHER/E4/pusher/ankle_l/k0", "B-PUSHER/E4/pusher/ankle_r/k0"], -3.0, 3.0),
+    g(&["B-PUSHER/E4/pusher/ankle_l/k1", "B-PUSHER/E4/pusher/ankle_r/k1"], -3.0, 3.0),
+];
+
+fn genes() -> &'static [Gene] {
+    match std::env::var("TUNE_GENES").as_deref() {
+        Ok("stand") => STAND_GENES,
+        _ => GENES,
+    }
+}
+
 /// Sets `label` and keeps every state's inter-thigh target at hip_l − hip_r.
 fn set(c: &mut Controller, label: &str, v: f64) {
     let id = c.param_id(label).unwrap_or_else(|| panic!("no parameter {label}"));
@@ -99,7 +122,7 @@ fn fix_inter_thigh(c: &mut Controller) {
 
 fn apply(base: &Controller, x: &[f64]) -> Controller {
     let mut c = base.clone();
-    for (gene, &v) in GENES.iter().zip(x) {
+    for (gene, &v) in genes().iter().zip(x) {
         for l in gene.labels {
             set(&mut c, l, v);
         }
@@ -109,7 +132,7 @@ fn apply(base: &Controller, x: &[f64]) -> Controller {
 }
 
 /// Iterations of one evaluation: about 6 s of standing after the landing.
-const N: u64 = 380;
+const N: u64 = 500;
 
 /// The staged score: reach the hands, rotate, land, stand.
 fn score(c: Controller) -> f64 {
@@ -127,8 +150,9 @@ fn score(c: Controller) -> f64 {
     })
     .expect("backflip");
     let mut s = 2.0 * out.iterations as f64 / N as f64;
+    // The pusher must stay up too: a fall costs more than standing earns.
     if out.pusher_fell {
-        s -= 2.0;
+        s -= 12.0;
     }
     let Some(k0) = out.foot_on_hands_at else { return s - 5.0 * d_min };
     // The foot must reach the hands on the acrobat's E3 (after 120 iterations), not before.
@@ -174,7 +198,7 @@ fn main() {
         let shift = if value(g) > std::f64::consts::PI { 2.0 * std::f64::consts::PI } else { 0.0 };
         (g.lo + shift, g.hi + shift)
     };
-    let x0: Vec<f64> = GENES
+    let x0: Vec<f64> = genes()
         .iter()
         .map(|g| {
             let (lo, hi) = interval(g);
@@ -186,7 +210,7 @@ fn main() {
     let out_path = std::path::Path::new("target/nunes").join(format!("backflip-tuned-{seed}.ron"));
     let _ = std::fs::create_dir_all("target/nunes");
     let space = Space {
-        dims: GENES
+        dims: genes()
             .iter()
             .map(|g| {
                 let (lo, hi) = interval(g);
@@ -217,7 +241,7 @@ fn main() {
                 out.landed_at,
                 out.standing
             );
-            let pairs: Vec<String> = GENES
+            let pairs: Vec<String> = genes()
                 .iter()
                 .zip(&x)
                 .flat_map(|(g, v)| g.labels.iter().map(move |l| format!("{l}={v:.3}")))

@@ -369,7 +369,8 @@ pub struct FlipOutcome {
     pub touched_down: bool,
     /// The pusher fell (a body other than a foot on the ground) at some point.
     pub pusher_fell: bool,
-    /// Both feet on the ground and the trunk within 0.5 rad of upright (one full turn) at the end.
+    /// At the end: no fall, both feet on the ground, the pelvis above 0.7 m and the trunk within
+    /// 0.5 rad of upright (one full turn).
     pub standing: bool,
     pub iterations: u64,
 }
@@ -449,7 +450,8 @@ pub fn backflip(
     }
     let a = &c.env.sensors[0];
     let upright = (out.final_rotation - 2.0 * std::f64::consts::PI).abs() < 0.5;
-    out.standing = out.landed_at.is_some()
+    out.standing = !out.touched_down
+        && out.landed_at.is_some()
         && a.support == anima_body::Support::Both
         && upright
         && out.final_pelvis_height > 0.7;

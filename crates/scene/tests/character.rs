@@ -121,17 +121,35 @@ fn the_optimised_thrower_puts_the_ball_through_the_hoop() {
 }
 
 #[test]
-fn the_committed_backflip_turns_over_and_lands_on_both_feet() {
+fn the_committed_backflip_turns_over_and_lands_standing() {
     let c = nunes::parse(nunes::BACKFLIP_RON).unwrap();
-    let out = nunes::backflip(c, nunes::FLIP_SPACING, 380, |_| ()).unwrap();
-    // A full backward turn of the trunk (at least 2π − 0.5 rad), both feet down after the flight, and
-    // no body of the acrobat but its feet ever on the ground. It does not yet stand up afterwards: it
-    // ends in a deep crouch (docs/reproduction/nunes.md), so `flipped()` is not asserted.
-    assert!(out.max_rotation >= 2.0 * std::f64::consts::PI - 0.5, "{out:?}");
-    assert!(out.landed_at.is_some() && !out.touched_down, "{out:?}");
-    assert_eq!(out.iterations, 380, "{out:?}");
+    // 30 s: the landing comes at about iteration 245, so both humanoids stand for 17 s after it.
+    let out = nunes::backflip(c, nunes::FLIP_SPACING, 600, |_| ()).unwrap();
+    // A full backward turn of the trunk (at least 2π − 0.5 rad), both feet down after the flight, no
+    // body of the acrobat but its feet ever on the ground, and at the end both feet down, the pelvis
+    // above 0.7 m and the trunk within 0.5 rad of upright. The pusher never falls.
+    assert!(out.flipped(), "{out:?}");
+    assert!(!out.pusher_fell, "{out:?}");
+    assert_eq!(out.iterations, 600, "{out:?}");
     // The thesis's timing (spec §8.4.5): the acrobat's T5 fires 5 iterations after the push begins.
     assert_eq!(out.acrobat_e6_at.unwrap() - out.push_at.unwrap(), 5, "{out:?}");
+}
+
+#[test]
+fn without_its_balance_feedback_the_acrobat_falls_after_the_landing() {
+    // The same flip with the feedback gains of the landing state E8 set to 0 (fixed targets θ₀): the
+    // acrobat lands, cannot stop its backward speed, and falls. So the standing landing above is the
+    // feedback's work.
+    let mut c = nunes::parse(nunes::BACKFLIP_RON).unwrap();
+    for act in ["waist", "ankle_l", "ankle_r"] {
+        for k in ["k0", "k1"] {
+            let id = c.param_id(&format!("B-ACRO-BODY/E8/acrobat/{act}/{k}")).unwrap();
+            c.set_param(id, 0.0);
+        }
+    }
+    let out = nunes::backflip(c, nunes::FLIP_SPACING, 600, |_| ()).unwrap();
+    assert!(out.landed_at.is_some(), "{out:?}");
+    assert!(out.touched_down && !out.flipped(), "{out:?}");
 }
 
 #[test]
