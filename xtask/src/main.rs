@@ -32,8 +32,9 @@ enum Command {
     /// implicit integrators against a converged reference (docs/reproduction/oliveira-implicit.md).
     /// Nunes 2006's controllers: nunes-walk, nunes-throw, nunes-flip, or nunes (all, which also writes
     /// docs/reproduction/nunes-results.md); beyond the thesis: nunes-optimisers (four optimisers over
-    /// --seeds seeds, docs/reproduction/nunes-optimisers.md) and nunes-robust (CMA-ES over pushes,
-    /// assets/controllers/walk-robust.ron).
+    /// --seeds seeds, docs/reproduction/nunes-optimisers.md), nunes-robust (CMA-ES over pushes,
+    /// assets/controllers/walk-robust.ron) and nunes-simbicon (the same with balance feedback,
+    /// docs/reproduction/nunes-simbicon.md, assets/controllers/walk-simbicon.ron).
     Reproduce {
         experiment: String,
         /// Friction reading for the scene experiments: literal (default) or viscous.

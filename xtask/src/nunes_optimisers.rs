@@ -10,6 +10,9 @@
 //! * `cargo xtask reproduce nunes-robust`: CMA-ES on a robust objective (the mean over six pushes of
 //!   ±20 N·s at random times, the same pushes for every candidate: common random numbers) from the
 //!   re-authored walker, written to `assets/controllers/walk-robust.ron`, with the same measurements.
+//! * `cargo xtask reproduce nunes-simbicon`: the same search for the walker with SIMBICON-style
+//!   feedback (`anima_scene::nunes::simbicon`), written to `assets/controllers/walk-simbicon.ron`, and
+//!   compared with the thesis's machines.
 
 use std::fmt::Write as _;
 
@@ -281,72 +284,116 @@ pub fn optimisers(seeds: usize) -> Result<String> {
     Ok(s)
 }
 
-/// `reproduce nunes-robust`: CMA-ES on the mean score over six pushes (common random numbers).
-pub fn robust() -> Result<String> {
-    const PUSHES: usize = 6;
-    const IMPULSE: f64 = 20.0;
-    const ROBUST_BUDGET: usize = 150;
-    let base = nunes::parse(nunes::WALK_RON)?;
+/// The robust objective's pushes: six of ±20 N·s at random times (seeded), the same for every
+/// candidate (common random numbers).
+const ROBUST_PUSHES: usize = 6;
+const ROBUST_IMPULSE: f64 = 20.0;
+/// CMA-ES evaluations of a robust run.
+const ROBUST_BUDGET: usize = 150;
+
+fn robust_pushes() -> Vec<Push> {
     let mut rng = ChaCha8Rng::seed_from_u64(crate::nunes::SEED);
-    let pushes: Vec<Push> = (0..PUSHES)
+    (0..ROBUST_PUSHES)
         .map(|k| {
             let at = rng.random_range(200..800);
-            push(if k % 2 == 0 { IMPULSE } else { -IMPULSE }, at)
+            push(if k % 2 == 0 { ROBUST_IMPULSE } else { -ROBUST_IMPULSE }, at)
         })
-        .collect();
-    let objective = |x: &[f64]| {
-        let c = with_poses(&base, x);
-        pushes.iter().map(|p| score(c.clone(), std::slice::from_ref(p))).sum::<f64>() / PUSHES as f64
-    };
-    let x0: Vec<f64> = {
-        // The re-authored walker's own numbers, read back from the controller.
-        let ids = walk_poses::NAMES.len();
-        let probe = |label: &str| base.param(base.param_id(label).expect("walker parameter"));
-        let v = [
-            probe("W-LEGS/E1/waist"),
-            probe("W-LEGS/E1/hip_l"),
-            probe("W-LEGS/E1/knee_l"),
-            probe("W-LEGS/E1/ankle_l"),
-            probe("W-LEGS/E1/hip_r"),
-            probe("W-LEGS/E1/knee_r"),
-            probe("W-LEGS/E1/ankle_r"),
-            probe("W-LEGS/E3/hip_l"),
-            probe("W-LEGS/E3/knee_l"),
-            probe("W-LEGS/E3/ankle_l"),
-            probe("W-LEGS/E3/hip_r"),
-            probe("W-LEGS/E3/ankle_r"),
-        ];
-        debug_assert_eq!(v.len(), ids);
-        v.iter()
-            .zip(walk_poses::LO.iter().zip(walk_poses::HI))
-            .map(|(&x, (&lo, hi))| x.clamp(lo, hi))
-            .collect()
-    };
-    let start = with_poses(&base, &x0);
+        .collect()
+}
+
+/// The mean walking score of `c` over `pushes`, one walk per push.
+fn robust_score(c: &Controller, pushes: &[Push]) -> f64 {
+    pushes.iter().map(|p| score(c.clone(), std::slice::from_ref(p))).sum::<f64>() / pushes.len() as f64
+}
+
+/// The re-authored walker's own twelve pose numbers, read back from `walk.ron` and clamped into
+/// [`walk_poses::space`].
+fn walker_poses(base: &Controller) -> Vec<f64> {
+    let probe = |label: &str| base.param(base.param_id(label).expect("walker parameter"));
+    let v = [
+        probe("W-LEGS/E1/waist"),
+        probe("W-LEGS/E1/hip_l"),
+        probe("W-LEGS/E1/knee_l"),
+        probe("W-LEGS/E1/ankle_l"),
+        probe("W-LEGS/E1/hip_r"),
+        probe("W-LEGS/E1/knee_r"),
+        probe("W-LEGS/E1/ankle_r"),
+        probe("W-LEGS/E3/hip_l"),
+        probe("W-LEGS/E3/knee_l"),
+        probe("W-LEGS/E3/ankle_l"),
+        probe("W-LEGS/E3/hip_r"),
+        probe("W-LEGS/E3/ankle_r"),
+    ];
+    v.iter().zip(walk_poses::LO.iter().zip(walk_poses::HI)).map(|(&x, (&lo, hi))| x.clamp(lo, hi)).collect()
+}
+
+/// CMA-ES (σ₀ = 0.1 of each interval, no restarts) on the robust objective from `x0`; returns the
+/// best point and its score.
+fn robust_search(
+    name: &str,
+    space: anima_control::optimise::Space,
+    x0: Vec<f64>,
+    objective: &(impl Fn(&[f64]) -> f64 + Sync),
+) -> Result<(Vec<f64>, f64, usize)> {
     let f0 = objective(&x0);
-    eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
     let mut cfg = CmaesConfig::new(x0.clone(), 0.1);
     cfg.restarts = 0;
-    let mut opt = Cmaes::new(walk_poses::space(), cfg, crate::nunes::SEED)?;
+    let mut opt = Cmaes::new(space, cfg, crate::nunes::SEED)?;
     let mut log = RunLog::default();
     while log.len() < ROBUST_BUDGET {
         let before = log.len();
-        run(&mut opt, &objective, before + 1, &mut log);
+        run(&mut opt, objective, before + 1, &mut log);
         if log.len() == before {
             break;
         }
         eprintln!(
-            "xtask:   CMA-ES robust: {} evaluations, best {:.2}",
+            "xtask:   CMA-ES {name}: {} evaluations, best {:.2}",
             log.len(),
             log.best().map_or(f64::NAN, |e| e.fitness)
         );
     }
-    let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((x0.clone(), f0));
-    let winner = with_poses(&base, &best.0);
+    let (x, f) = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((x0, f0));
+    Ok((x, f, log.len()))
+}
+
+/// One row of a walker comparison: robust score, 10-minute distance, largest pushes.
+fn measure_row(s: &mut String, name: &str, c: &Controller, robust: f64) -> Result<()> {
+    let (d, fell) = ten_minutes(c);
+    let (fwd, bwd) = rayon::join(|| largest_push(c, 1.0), || largest_push(c, -1.0));
+    writeln!(
+        s,
+        "| {name} | {robust:.2} | {d:.0}{} | {:.2} | {fwd} / {bwd} |",
+        if fell { " (fell)" } else { "" },
+        d / (LONG_ITERATIONS as f64 * nunes::DT),
+    )?;
+    Ok(())
+}
+
+fn pushes_list(pushes: &[Push]) -> String {
+    pushes
+        .iter()
+        .map(|p| format!("{}{}", if p.force[0] > 0.0 { "+" } else { "−" }, p.at))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+const WALKER_TABLE_HEAD: &str = "| walker | robust score | 10-minute distance (m) | mean speed (m/s) | largest push forward / backward (N·s) |\n|---|---|---|---|---|";
+
+/// `reproduce nunes-robust`: CMA-ES on the mean score over six pushes (common random numbers).
+pub fn robust() -> Result<String> {
+    let base = nunes::parse(nunes::WALK_RON)?;
+    let pushes = robust_pushes();
+    let objective = |x: &[f64]| robust_score(&with_poses(&base, x), &pushes);
+    let x0 = walker_poses(&base);
+    let start = with_poses(&base, &x0);
+    let f0 = objective(&x0);
+    eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
+    let (best, fbest, evaluations) = robust_search("robust", walk_poses::space(), x0, &objective)?;
+    let winner = with_poses(&base, &best);
     let path = crate::root().join("assets/controllers/walk-robust.ron");
     let text = format!(
         "// Written by `cargo xtask reproduce nunes-robust`: walk.ron with its twelve symmetric leg-pose numbers\n\
-         // (anima_scene::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{IMPULSE} N·s head\n\
+         // (anima_scene::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{ROBUST_IMPULSE} N·s head\n\
          // pushes at random times (common random numbers, seed {}).\n{}",
         crate::nunes::SEED,
         winner.to_ron()
@@ -356,34 +403,82 @@ pub fn robust() -> Result<String> {
     writeln!(s, "## A walker optimised for pushes (CMA-ES, robust objective)\n")?;
     writeln!(
         s,
-        "`cargo xtask reproduce nunes-robust`: CMA-ES (σ₀ = 0.1 of each interval, no restarts, {} evaluations) \
+        "`cargo xtask reproduce nunes-robust`: CMA-ES (σ₀ = 0.1 of each interval, no restarts, {evaluations} evaluations) \
          over the twelve leg-pose numbers from the re-authored walker, maximising the mean score over six pushes \
-         of ±{IMPULSE} N·s on the head (0.1 s, at iterations {}) — the same six for every candidate (common \
+         of ±{ROBUST_IMPULSE} N·s on the head (0.1 s, at iterations {}) — the same six for every candidate (common \
          random numbers). The winner is `assets/controllers/walk-robust.ron`.\n",
-        log.len(),
-        pushes
-            .iter()
-            .map(|p| format!("{}{}", if p.force[0] > 0.0 { "+" } else { "−" }, p.at))
-            .collect::<Vec<_>>()
-            .join(", ")
+        pushes_list(&pushes)
     )?;
+    writeln!(s, "{WALKER_TABLE_HEAD}")?;
+    measure_row(&mut s, "walk.ron (re-authored)", &start, f0)?;
+    measure_row(&mut s, "walk-robust.ron (CMA-ES)", &winner, fbest)?;
+    writeln!(s)?;
+    Ok(s)
+}
+
+/// `reproduce nunes-simbicon`: the thesis's walking machines with SIMBICON-style balance feedback
+/// (swing hip θ₀ + c_d·d + c_v·v in the world frame, trunk at a world angle), optimised exactly as
+/// `nunes-robust` optimises the thesis's machine (same start poses, pushes, budget and seed) with
+/// c_d and c_v as two more numbers; the two winners are compared.
+pub fn simbicon() -> Result<String> {
+    let walker = nunes::parse(nunes::WALK_RON)?;
+    let base = nunes::simbicon::controller(&walker)?;
+    let pushes = robust_pushes();
+    let with = |x: &[f64]| {
+        let mut c = base.clone();
+        nunes::simbicon::set(&mut c, x);
+        c
+    };
+    let objective = |x: &[f64]| robust_score(&with(x), &pushes);
+    let mut x0 = walker_poses(&walker);
+    x0.extend([0.0, 0.0]);
+    let f0 = objective(&x0);
+    eprintln!("xtask: robust objective of the SIMBICON form with gains 0: {f0:.2}");
+    let (best, fbest, evaluations) =
+        robust_search("SIMBICON", nunes::simbicon::space(), x0.clone(), &objective)?;
+    let winner = with(&best);
+    let path = crate::root().join("assets/controllers/walk-simbicon.ron");
+    let text = format!(
+        "// Written by `cargo xtask reproduce nunes-simbicon`: walk.ron's machines with SIMBICON-style balance\n\
+         // feedback (anima_scene::nunes::simbicon): the swing hip's world angle θ₀ + c_d·d + c_v·v and the trunk at a\n\
+         // world angle. c_d = {:.3}, c_v = {:.3} and the twelve leg-pose numbers found by CMA-ES on the mean walking\n\
+         // score over six ±{ROBUST_IMPULSE} N·s head pushes (common random numbers, seed {}).\n{}",
+        best[12],
+        best[13],
+        crate::nunes::SEED,
+        winner.to_ron()
+    );
+    anima::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    let robust_walker = nunes::parse(nunes::WALK_ROBUST_RON)?;
+    let f_robust = robust_score(&robust_walker, &pushes);
+    let mut s = String::new();
+    writeln!(s, "## SIMBICON-style feedback against the thesis's machines\n")?;
     writeln!(
         s,
-        "| walker | robust score | 10-minute distance (m) | largest push forward / backward (N·s) |"
+        "`cargo xtask reproduce nunes-simbicon`: W-LEGS of `walk.ron` with the swing hip's target in the world \
+         frame, θ₀ + c_d·d + c_v·v (d: the centre of mass ahead of the stance foot; v: its forward speed), the \
+         inter-thigh target following it, and the trunk at a world angle; states, sensory transitions and arms \
+         are the thesis's. CMA-ES searched the twelve leg-pose numbers plus c_d ∈ [{}, {}] and c_v ∈ [{}, {}] \
+         ({evaluations} evaluations), from the re-authored walker's poses with gains 0, on the robust objective \
+         of `nunes-robust` (the same six pushes at iterations {}, seed, σ₀ and budget). The winner is \
+         `assets/controllers/walk-simbicon.ron`: c_d = {:.3}, c_v = {:.3}.\n",
+        nunes::simbicon::GAINS_LO[0],
+        nunes::simbicon::GAINS_HI[0],
+        nunes::simbicon::GAINS_LO[1],
+        nunes::simbicon::GAINS_HI[1],
+        pushes_list(&pushes),
+        best[12],
+        best[13],
     )?;
-    writeln!(s, "|---|---|---|---|")?;
-    for (name, c, f) in
-        [("walk.ron (re-authored)", &start, f0), ("walk-robust.ron (CMA-ES)", &winner, best.1)]
-    {
-        let (d, fell) = ten_minutes(c);
-        writeln!(
-            s,
-            "| {name} | {f:.2} | {d:.0}{} | {} / {} |",
-            if fell { " (fell)" } else { "" },
-            largest_push(c, 1.0),
-            largest_push(c, -1.0)
-        )?;
-    }
+    writeln!(s, "{WALKER_TABLE_HEAD}")?;
+    measure_row(&mut s, "walk-robust.ron (thesis's machines, CMA-ES)", &robust_walker, f_robust)?;
+    measure_row(&mut s, "SIMBICON form, gains 0 (start)", &with(&x0), f0)?;
+    measure_row(&mut s, "walk-simbicon.ron (CMA-ES)", &winner, fbest)?;
+    let mut zero = best.clone();
+    zero[12] = 0.0;
+    zero[13] = 0.0;
+    let no_gains = with(&zero);
+    measure_row(&mut s, "walk-simbicon.ron with c_d = c_v = 0", &no_gains, robust_score(&no_gains, &pushes))?;
     writeln!(s)?;
     Ok(s)
 }

@@ -51,6 +51,17 @@ pub fn run(experiment: &str, friction: &str, seeds: usize) -> Result<()> {
         print!("{}", crate::nunes_optimisers::optimisers(seeds)?);
         return Ok(());
     }
+    if experiment == "nunes-simbicon" {
+        let text = crate::nunes_optimisers::simbicon()?;
+        print!("{text}");
+        let doc = format!(
+            "# SIMBICON-style balance feedback in the thesis's representation\n\nWritten by `cargo xtask reproduce \
+             nunes-simbicon`.\n\n{text}"
+        );
+        let path = crate::root().join("docs/reproduction/nunes-simbicon.md");
+        anima::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
+        return Ok(());
+    }
     if experiment == "nunes-robust" {
         print!("{}", crate::nunes_optimisers::robust()?);
         return Ok(());

@@ -80,8 +80,8 @@ mod procedure;
 
 pub use controller::{Controller, Machine, MachineSensor, MachineType, Scope, Selection, Sensor};
 pub use desc::{
-    ActuatorRef, Condition, ControllerDesc, FireMode, MachineDesc, MachineKind, MachineSensorDesc, PoseEntry,
-    ProcedureCall, SensorDesc, StateDesc, TargetDesc, TransitionDesc,
+    ActuatorRef, Condition, ControllerDesc, FeedbackDesc, FeedbackTerm, FireMode, MachineDesc, MachineKind,
+    MachineSensorDesc, PoseEntry, ProcedureCall, SensorDesc, StateDesc, TargetDesc, TransitionDesc,
 };
 pub use error::{ControllerError, ControllerErrorKind};
 pub use io::{Frame, SensorInput, SensorQuery, TargetKind, TargetSignal, Targets};

@@ -16,6 +16,9 @@ pub const WALK_ROBUST_RON: &str = include_str!("../../../assets/controllers/walk
 pub const WALK_SYMMETRIC_RON: &str = include_str!("../../../assets/controllers/walk-symmetric.ron");
 /// The thesis's variant B: temporal instead of sensory transitions (spec §8.1.8).
 pub const WALK_TEMPORAL_RON: &str = include_str!("../../../assets/controllers/walk-temporal.ron");
+/// The SIMBICON form of the walker ([`simbicon`]) optimised like `walk-robust.ron` (written by
+/// `cargo xtask reproduce nunes-simbicon`).
+pub const WALK_SIMBICON_RON: &str = include_str!("../../../assets/controllers/walk-simbicon.ron");
 pub const THROW_RON: &str = include_str!("../../../assets/controllers/throw.ron");
 pub const THROW_OPTIMISED_RON: &str = include_str!("../../../assets/controllers/throw-optimised.ron");
 pub const BACKFLIP_RON: &str = include_str!("../../../assets/controllers/backflip.ron");
@@ -222,6 +225,103 @@ pub mod walk_poses {
             set(format!("W-LEGS/{state}/ankle_{st}"), x[11]);
             let s = if sw == "l" { 1.0 } else { -1.0 };
             set(format!("W-LEGS/{state}/inter_thigh"), s * (x[7] - x[10]));
+        }
+    }
+}
+
+/// A SIMBICON-style walker (Yin et al. 2007) in the thesis's representation: the walking machines
+/// of `walk.ron` with the swing hip's target in the world frame and balance feedback
+/// θ = θ₀ + c_d·d + c_v·v (d: the centre of mass ahead of the stance foot, m; v: its forward speed,
+/// m/s), and the trunk (waist) held at a world angle. Everything else — states, sensory
+/// transitions, the arms — is the thesis's walker, so the two can be compared on equal terms.
+pub mod simbicon {
+    use anima_control::optimise::{Dim, Space};
+    use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
+
+    use super::walk_poses;
+    use crate::character::{CharacterError, procedures};
+
+    /// The two feedback gains, after the twelve [`walk_poses`] numbers (whose swing-hip entries
+    /// become the world-frame θ₀, and whose waist entry the trunk's world angle).
+    pub const GAINS: [&str; 2] = ["c_d", "c_v"];
+    /// Intervals of the gains: SIMBICON's published walks use c_d ∈ [0, 2.2] and c_v ∈ [0, 0.55];
+    /// slightly negative values are allowed so that the search can find they do not help.
+    pub const GAINS_LO: [f64; 2] = [-0.5, -0.5];
+    pub const GAINS_HI: [f64; 2] = [2.5, 1.0];
+
+    /// The swing phases of W-LEGS: state, swing side, stance side (the sensor's argument).
+    const SWING: [(&str, &str, &str); 4] =
+        [("E1", "l", "right"), ("E3", "l", "right"), ("E4", "r", "left"), ("E6", "r", "left")];
+
+    /// Turns a walker (`walk.ron` or one of its variants) into its SIMBICON form, gains 0.
+    ///
+    /// # Panics
+    /// If the controller has no W-LEGS machine.
+    pub fn controller(walker: &Controller) -> Result<Controller, CharacterError> {
+        let mut desc = walker.to_desc();
+        let legs =
+            desc.machines.iter_mut().find(|m| m.name == "W-LEGS").expect("a walker has a W-LEGS machine");
+        for state in &mut legs.states {
+            let Some(&(_, sw, stance)) = SWING.iter().find(|(n, _, _)| *n == state.name) else { continue };
+            let terms = vec![
+                FeedbackTerm {
+                    gain: Param::fixed(0.0),
+                    sensor: SensorDesc {
+                        kind: "com_offset".into(),
+                        args: vec![stance.into()],
+                        params: vec![],
+                    },
+                },
+                FeedbackTerm {
+                    gain: Param::fixed(0.0),
+                    sensor: SensorDesc { kind: "com_speed".into(), args: vec![], params: vec![] },
+                },
+            ];
+            for entry in &mut state.pose {
+                let name = match &entry.0 {
+                    ActuatorRef::Name(n) => n.clone(),
+                    ActuatorRef::Index(i) => walker.actuators()[*i].clone(),
+                };
+                let TargetDesc::Angle(p) = entry.1 else { continue };
+                entry.1 = if name == format!("hip_{sw}") {
+                    TargetDesc::Feedback(FeedbackDesc { base: p, world: true, terms: terms.clone() })
+                } else if name == "inter_thigh" {
+                    TargetDesc::Feedback(FeedbackDesc { base: p, world: false, terms: terms.clone() })
+                } else if name == "waist" {
+                    TargetDesc::WorldAngle(p)
+                } else {
+                    continue;
+                };
+            }
+        }
+        Ok(Controller::from_desc(desc, &procedures())?)
+    }
+
+    /// The search space: the twelve pose numbers, then c_d and c_v.
+    pub fn space() -> Space {
+        let mut s = walk_poses::space();
+        s.dims.extend(GAINS.iter().zip(GAINS_LO.iter().zip(GAINS_HI)).map(|(n, (&a, b))| Dim::new(n, a, b)));
+        s
+    }
+
+    /// Writes `x` (twelve pose numbers, c_d, c_v) into a controller made by [`controller`]. The
+    /// inter-thigh target (hip_l − hip_r) gets the swing hip's feedback with the swing side's sign.
+    ///
+    /// # Panics
+    /// If the controller was not made by [`controller`].
+    pub fn set(c: &mut Controller, x: &[f64]) {
+        walk_poses::set(c, &x[..12]);
+        let (cd, cv) = (x[12], x[13]);
+        let mut set = |label: String, v: f64| {
+            let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
+            c.set_param(id, v);
+        };
+        for (state, sw, _) in SWING {
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            set(format!("W-LEGS/{state}/hip_{sw}/k0"), cd);
+            set(format!("W-LEGS/{state}/hip_{sw}/k1"), cv);
+            set(format!("W-LEGS/{state}/inter_thigh/k0"), s * cd);
+            set(format!("W-LEGS/{state}/inter_thigh/k1"), s * cv);
         }
     }
 }

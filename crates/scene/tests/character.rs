@@ -153,6 +153,62 @@ fn without_its_balance_feedback_the_acrobat_falls_after_the_landing() {
 }
 
 #[test]
+fn the_simbicon_form_puts_feedback_on_the_swing_hip_only() {
+    // simbicon::controller turns W-LEGS's swing hips into world-frame feedback targets (and the
+    // inter-thigh target with them) and the trunk into a world angle, and leaves everything else.
+    let walker = nunes::parse(nunes::WALK_RON).unwrap();
+    let mut c = nunes::simbicon::controller(&walker).unwrap();
+    for label in
+        ["W-LEGS/E1/hip_l/k0", "W-LEGS/E3/hip_l/k1", "W-LEGS/E4/hip_r/k0", "W-LEGS/E6/inter_thigh/k1"]
+    {
+        assert!(c.param_id(label).is_some(), "{label}");
+    }
+    for label in
+        ["W-LEGS/E1/hip_r/k0", "W-LEGS/E4/hip_l/k0", "W-LEGS/E1/knee_l/k0", "W-ARMS/E1/shoulder_l/k0"]
+    {
+        assert!(c.param_id(label).is_none(), "{label}");
+    }
+    let mut x: Vec<f64> = nunes::walk_poses::SPEC.to_vec();
+    x.extend([0.7, 0.3]);
+    nunes::simbicon::set(&mut c, &x);
+    let get = |c: &anima_control::Controller, l: &str| c.param(c.param_id(l).unwrap());
+    assert_eq!(get(&c, "W-LEGS/E4/hip_r/k0"), 0.7);
+    assert_eq!(get(&c, "W-LEGS/E1/inter_thigh/k1"), 0.3);
+    // A right swing moves hip_r, so hip_l − hip_r moves the other way.
+    assert_eq!(get(&c, "W-LEGS/E4/inter_thigh/k1"), -0.3);
+    assert_eq!(get(&c, "W-LEGS/E1/hip_l"), x[1]);
+    assert!(c.to_ron().contains("WorldAngle"));
+}
+
+#[test]
+fn the_simbicon_walker_walks_and_needs_its_feedback() {
+    // The committed SIMBICON walker walks the thesis's 1000 iterations; with its two gains set to 0
+    // (the same poses, fixed swing-hip targets in the world frame) it falls.
+    let walk = |gains: Option<f64>| {
+        let mut c = nunes::parse(nunes::WALK_SIMBICON_RON).unwrap();
+        if let Some(g) = gains {
+            let ids: Vec<_> = c
+                .params()
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.kind == anima_control::ParamKind::FeedbackGain)
+                .map(|(i, _)| i)
+                .collect();
+            assert_eq!(ids.len(), 16, "two gains on the swing hip and inter-thigh in four states");
+            for i in ids {
+                c.set_param(anima_control::ParamId(i), g);
+            }
+        }
+        let rules = WalkRules { window: 0, ..WalkRules::default() };
+        nunes::walk(c, 1000, &rules, &[], |_| ()).unwrap()
+    };
+    let with = walk(None);
+    assert!(!with.fell && with.distance > 10.0, "{with:?}");
+    let without = walk(Some(0.0));
+    assert!(without.fell, "{without:?}");
+}
+
+#[test]
 fn a_hard_push_on_the_head_knocks_the_walker_down() {
     // The push the optimiser comparison measures robustness with (a force on the head for two control
     // steps): nothing happens without it, and an impulse far beyond any reported survival fells the
