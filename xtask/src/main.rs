@@ -44,9 +44,10 @@ enum Command {
         /// docs/reproduction/oliveira-adaptive.md.
         #[arg(long)]
         adaptive: bool,
-        /// With nunes-optimisers: seeds per optimiser.
-        #[arg(long, default_value_t = 10)]
-        seeds: usize,
+        /// With nunes-optimisers: seeds per optimiser (default 10); with nunes-simbicon: CMA-ES seeds
+        /// per form (default 5).
+        #[arg(long)]
+        seeds: Option<usize>,
     },
     /// Regenerate every reference plot and figure scene into docs/figures/ (a few minutes);
     /// `--only nunes` draws only the controller figures (strobe pictures and optimiser comparisons).

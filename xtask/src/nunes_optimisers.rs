@@ -334,11 +334,12 @@ fn robust_search(
     space: anima_control::optimise::Space,
     x0: Vec<f64>,
     objective: &(impl Fn(&[f64]) -> f64 + Sync),
+    seed: u64,
 ) -> Result<(Vec<f64>, f64, usize)> {
     let f0 = objective(&x0);
     let mut cfg = CmaesConfig::new(x0.clone(), 0.1);
     cfg.restarts = 0;
-    let mut opt = Cmaes::new(space, cfg, crate::nunes::SEED)?;
+    let mut opt = Cmaes::new(space, cfg, seed)?;
     let mut log = RunLog::default();
     while log.len() < ROBUST_BUDGET {
         let before = log.len();
@@ -356,15 +357,32 @@ fn robust_search(
     Ok((x, f, log.len()))
 }
 
-/// One row of a walker comparison: robust score, 10-minute distance, largest pushes.
+/// What the walker comparisons measure: 10-minute distance (m) and whether it fell, and the largest
+/// pushes survived forward and backward (N·s).
+struct Robustness {
+    distance: f64,
+    fell: bool,
+    forward: f64,
+    backward: f64,
+}
+
+fn robustness(c: &Controller) -> Robustness {
+    let ((distance, fell), (forward, backward)) =
+        rayon::join(|| ten_minutes(c), || rayon::join(|| largest_push(c, 1.0), || largest_push(c, -1.0)));
+    Robustness { distance, fell, forward, backward }
+}
+
+/// One row of a walker comparison: robust score, 10-minute distance, mean speed, largest pushes.
 fn measure_row(s: &mut String, name: &str, c: &Controller, robust: f64) -> Result<()> {
-    let (d, fell) = ten_minutes(c);
-    let (fwd, bwd) = rayon::join(|| largest_push(c, 1.0), || largest_push(c, -1.0));
+    let r = robustness(c);
     writeln!(
         s,
-        "| {name} | {robust:.2} | {d:.0}{} | {:.2} | {fwd} / {bwd} |",
-        if fell { " (fell)" } else { "" },
-        d / (LONG_ITERATIONS as f64 * nunes::DT),
+        "| {name} | {robust:.2} | {:.0}{} | {:.2} | {} / {} |",
+        r.distance,
+        if r.fell { " (fell)" } else { "" },
+        r.distance / (LONG_ITERATIONS as f64 * nunes::DT),
+        r.forward,
+        r.backward
     )?;
     Ok(())
 }
@@ -388,7 +406,7 @@ pub fn robust() -> Result<String> {
     let start = with_poses(&base, &x0);
     let f0 = objective(&x0);
     eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
-    let (best, fbest, evaluations) = robust_search("robust", walk_poses::space(), x0, &objective)?;
+    let (best, fbest, evaluations) = robust_search("robust", walk_poses::space(), x0, &objective, crate::nunes::SEED)?;
     let winner = with_poses(&base, &best);
     let path = crate::root().join("assets/controllers/walk-robust.ron");
     let text = format!(
@@ -416,11 +434,13 @@ pub fn robust() -> Result<String> {
     Ok(s)
 }
 
-/// `reproduce nunes-simbicon`: the thesis's walking machines with SIMBICON-style balance feedback
-/// (swing hip θ₀ + c_d·d + c_v·v in the world frame, trunk at a world angle), optimised exactly as
-/// `nunes-robust` optimises the thesis's machine (same start poses, pushes, budget and seed) with
-/// c_d and c_v as two more numbers; the two winners are compared.
-pub fn simbicon() -> Result<String> {
+/// `reproduce nunes-simbicon [--seeds N]`: the thesis's walking machines with SIMBICON-style balance
+/// feedback (swing hip θ₀ + c_d·d + c_v·v in the world frame, trunk at a world angle), optimised
+/// exactly as `nunes-robust` optimises the thesis's machine (same start poses, pushes, budget) with
+/// c_d and c_v as two more numbers. Both forms are searched with `seeds` CMA-ES seeds from 2006 on;
+/// seed 2006's SIMBICON winner is written to `assets/controllers/walk-simbicon.ron` (its thesis-form
+/// winner is `walk-robust.ron`).
+pub fn simbicon(seeds: usize) -> Result<String> {
     let walker = nunes::parse(nunes::WALK_RON)?;
     let base = nunes::simbicon::controller(&walker)?;
     let pushes = robust_pushes();
@@ -429,13 +449,48 @@ pub fn simbicon() -> Result<String> {
         nunes::simbicon::set(&mut c, x);
         c
     };
+    let thesis_objective = |x: &[f64]| robust_score(&with_poses(&walker, x), &pushes);
     let objective = |x: &[f64]| robust_score(&with(x), &pushes);
-    let mut x0 = walker_poses(&walker);
+    let x0_thesis = walker_poses(&walker);
+    let mut x0 = x0_thesis.clone();
     x0.extend([0.0, 0.0]);
     let f0 = objective(&x0);
     eprintln!("xtask: robust objective of the SIMBICON form with gains 0: {f0:.2}");
-    let (best, fbest, evaluations) =
-        robust_search("SIMBICON", nunes::simbicon::space(), x0.clone(), &objective)?;
+    struct Row {
+        seed: u64,
+        thesis: (f64, Robustness),
+        simbicon: (f64, Robustness, f64, f64),
+    }
+    let mut rows = Vec::new();
+    let mut winner = None;
+    let mut evaluations = 0;
+    for seed in crate::nunes::SEED..crate::nunes::SEED + seeds as u64 {
+        let (xt, ft, _) = robust_search(
+            &format!("thesis form, seed {seed}"),
+            walk_poses::space(),
+            x0_thesis.clone(),
+            &thesis_objective,
+            seed,
+        )?;
+        let (xs, fs, n) = robust_search(
+            &format!("SIMBICON form, seed {seed}"),
+            nunes::simbicon::space(),
+            x0.clone(),
+            &objective,
+            seed,
+        )?;
+        evaluations = n;
+        let (rt, rs) = rayon::join(|| robustness(&with_poses(&walker, &xt)), || robustness(&with(&xs)));
+        eprintln!(
+            "xtask: seed {seed}: thesis form {ft:.2} ({:.0} m, {} / {} N·s), SIMBICON {fs:.2} ({:.0} m, {} / {} N·s)",
+            rt.distance, rt.forward, rt.backward, rs.distance, rs.forward, rs.backward
+        );
+        if winner.is_none() {
+            winner = Some(xs.clone());
+        }
+        rows.push(Row { seed, thesis: (ft, rt), simbicon: (fs, rs, xs[12], xs[13]) });
+    }
+    let best = winner.unwrap_or_else(|| x0.clone());
     let winner = with(&best);
     let path = crate::root().join("assets/controllers/walk-simbicon.ron");
     let text = format!(
@@ -449,31 +504,81 @@ pub fn simbicon() -> Result<String> {
         winner.to_ron()
     );
     anima::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
-    let robust_walker = nunes::parse(nunes::WALK_ROBUST_RON)?;
-    let f_robust = robust_score(&robust_walker, &pushes);
     let mut s = String::new();
     writeln!(s, "## SIMBICON-style feedback against the thesis's machines\n")?;
     writeln!(
         s,
-        "`cargo xtask reproduce nunes-simbicon`: W-LEGS of `walk.ron` with the swing hip's target in the world \
-         frame, θ₀ + c_d·d + c_v·v (d: the centre of mass ahead of the stance foot; v: its forward speed), the \
-         inter-thigh target following it, and the trunk at a world angle; states, sensory transitions and arms \
-         are the thesis's. CMA-ES searched the twelve leg-pose numbers plus c_d ∈ [{}, {}] and c_v ∈ [{}, {}] \
-         ({evaluations} evaluations), from the re-authored walker's poses with gains 0, on the robust objective \
-         of `nunes-robust` (the same six pushes at iterations {}, seed, σ₀ and budget). The winner is \
-         `assets/controllers/walk-simbicon.ron`: c_d = {:.3}, c_v = {:.3}.\n",
+        "`cargo xtask reproduce nunes-simbicon --seeds {seeds}`: W-LEGS of `walk.ron` with the swing hip's target in \
+         the world frame, θ₀ + c_d·d + c_v·v (d: the centre of mass ahead of the stance foot; v: its forward speed), \
+         the inter-thigh target following it, and the trunk at a world angle; states, sensory transitions and arms \
+         are the thesis's. For each seed, CMA-ES (σ₀ = 0.1 of each interval, no restarts, {evaluations} \
+         evaluations) searched the thesis's form (the twelve leg-pose numbers, as `nunes-robust`) and the SIMBICON \
+         form (the same twelve plus c_d ∈ [{}, {}] and c_v ∈ [{}, {}], starting at 0), both from the re-authored \
+         walker's poses, on the robust objective of `nunes-robust`: the mean walking score over the same six \
+         ±{ROBUST_IMPULSE} N·s head pushes at iterations {}. Seed {}'s winners are `walk-robust.ron` and \
+         `walk-simbicon.ron`.\n",
         nunes::simbicon::GAINS_LO[0],
         nunes::simbicon::GAINS_HI[0],
         nunes::simbicon::GAINS_LO[1],
         nunes::simbicon::GAINS_HI[1],
         pushes_list(&pushes),
-        best[12],
-        best[13],
+        crate::nunes::SEED,
     )?;
+    writeln!(
+        s,
+        "| seed | thesis's machines: robust score | 10-minute distance (m) | largest push forward / backward (N·s) \
+         | SIMBICON form: robust score | 10-minute distance (m) | largest push forward / backward (N·s) | c_d | c_v |"
+    )?;
+    writeln!(s, "|---|---|---|---|---|---|---|---|---|")?;
+    let dist = |r: &Robustness| format!("{:.0}{}", r.distance, if r.fell { " (fell)" } else { "" });
+    for r in &rows {
+        writeln!(
+            s,
+            "| {} | {:.2} | {} | {} / {} | {:.2} | {} | {} / {} | {:.3} | {:.3} |",
+            r.seed,
+            r.thesis.0,
+            dist(&r.thesis.1),
+            r.thesis.1.forward,
+            r.thesis.1.backward,
+            r.simbicon.0,
+            dist(&r.simbicon.1),
+            r.simbicon.1.forward,
+            r.simbicon.1.backward,
+            r.simbicon.2,
+            r.simbicon.3
+        )?;
+    }
+    let med = |f: &dyn Fn(&Row) -> f64| median(rows.iter().map(f).collect());
+    writeln!(
+        s,
+        "| median | {:.2} | {:.0} | {} / {} | {:.2} | {:.0} | {} / {} | {:.3} | {:.3} |",
+        med(&|r| r.thesis.0),
+        med(&|r| r.thesis.1.distance),
+        med(&|r| r.thesis.1.forward),
+        med(&|r| r.thesis.1.backward),
+        med(&|r| r.simbicon.0),
+        med(&|r| r.simbicon.1.distance),
+        med(&|r| r.simbicon.1.forward),
+        med(&|r| r.simbicon.1.backward),
+        med(&|r| r.simbicon.2),
+        med(&|r| r.simbicon.3)
+    )?;
+    let wins = |f: &dyn Fn(&Row) -> bool| rows.iter().filter(|r| f(r)).count();
+    writeln!(
+        s,
+        "\nThe SIMBICON form scored higher on the robust objective in {} of {seeds} seeds, survived the larger \
+         forward push in {} and the larger backward push in {}, and walked 10 minutes without falling in {} \
+         (the thesis's form: {}).\n",
+        wins(&|r| r.simbicon.0 > r.thesis.0),
+        wins(&|r| r.simbicon.1.forward > r.thesis.1.forward),
+        wins(&|r| r.simbicon.1.backward > r.thesis.1.backward),
+        wins(&|r| !r.simbicon.1.fell),
+        wins(&|r| !r.thesis.1.fell),
+    )?;
+    writeln!(s, "Seed {}'s SIMBICON winner, and what its gains do:\n", crate::nunes::SEED)?;
     writeln!(s, "{WALKER_TABLE_HEAD}")?;
-    measure_row(&mut s, "walk-robust.ron (thesis's machines, CMA-ES)", &robust_walker, f_robust)?;
-    measure_row(&mut s, "SIMBICON form, gains 0 (start)", &with(&x0), f0)?;
-    measure_row(&mut s, "walk-simbicon.ron (CMA-ES)", &winner, fbest)?;
+    measure_row(&mut s, "SIMBICON form, gains 0 (the start)", &with(&x0), f0)?;
+    measure_row(&mut s, "walk-simbicon.ron (CMA-ES)", &winner, rows.first().map_or(f64::NAN, |r| r.simbicon.0))?;
     let mut zero = best.clone();
     zero[12] = 0.0;
     zero[13] = 0.0;

@@ -40,7 +40,7 @@ impl Report {
     }
 }
 
-pub fn run(experiment: &str, friction: &str, seeds: usize) -> Result<()> {
+pub fn run(experiment: &str, friction: &str, seeds: Option<usize>) -> Result<()> {
     if experiment == "oliveira-implicit" {
         return crate::oliveira_implicit::reproduce();
     }
@@ -48,11 +48,11 @@ pub fn run(experiment: &str, friction: &str, seeds: usize) -> Result<()> {
         return crate::oliveira::reproduce(which);
     }
     if experiment == "nunes-optimisers" {
-        print!("{}", crate::nunes_optimisers::optimisers(seeds)?);
+        print!("{}", crate::nunes_optimisers::optimisers(seeds.unwrap_or(10))?);
         return Ok(());
     }
     if experiment == "nunes-simbicon" {
-        let text = crate::nunes_optimisers::simbicon()?;
+        let text = crate::nunes_optimisers::simbicon(seeds.unwrap_or(5))?;
         print!("{text}");
         let doc = format!(
             "# SIMBICON-style balance feedback in the thesis's representation\n\nWritten by `cargo xtask reproduce \
