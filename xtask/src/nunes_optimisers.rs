@@ -406,7 +406,8 @@ pub fn robust() -> Result<String> {
     let start = with_poses(&base, &x0);
     let f0 = objective(&x0);
     eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
-    let (best, fbest, evaluations) = robust_search("robust", walk_poses::space(), x0, &objective, crate::nunes::SEED)?;
+    let (best, fbest, evaluations) =
+        robust_search("robust", walk_poses::space(), x0, &objective, crate::nunes::SEED)?;
     let winner = with_poses(&base, &best);
     let path = crate::root().join("assets/controllers/walk-robust.ron");
     let text = format!(
@@ -578,7 +579,12 @@ pub fn simbicon(seeds: usize) -> Result<String> {
     writeln!(s, "Seed {}'s SIMBICON winner, and what its gains do:\n", crate::nunes::SEED)?;
     writeln!(s, "{WALKER_TABLE_HEAD}")?;
     measure_row(&mut s, "SIMBICON form, gains 0 (the start)", &with(&x0), f0)?;
-    measure_row(&mut s, "walk-simbicon.ron (CMA-ES)", &winner, rows.first().map_or(f64::NAN, |r| r.simbicon.0))?;
+    measure_row(
+        &mut s,
+        "walk-simbicon.ron (CMA-ES)",
+        &winner,
+        rows.first().map_or(f64::NAN, |r| r.simbicon.0),
+    )?;
     let mut zero = best.clone();
     zero[12] = 0.0;
     zero[13] = 0.0;
