@@ -32,6 +32,8 @@ const CATALOGUE: &[&str] = &[
     "foot_on_hands",
     "flip_brake",
     "both_feet_down",
+    "com_offset",
+    "com_speed",
 ];
 
 #[test]
