@@ -1,6 +1,7 @@
 //! `cargo xtask figures` for Nunes 2006: strobe pictures of the walker before and after optimisation
-//! (Fig. 6.7), the throw (Fig. 6.12) and the assisted backflip (Fig. 6.17), and the best fitness against
-//! evaluations of every optimiser on the walking and throwing objectives.
+//! (Fig. 6.7), the throw (Fig. 6.12) and the assisted backflip (Fig. 6.17), the robust and SIMBICON
+//! walkers under pushes, and the best fitness against evaluations of every optimiser on the walking and
+//! throwing objectives.
 //!
 //! A strobe picture overlays the figure every few control iterations, older frames faded towards the
 //! sky, in the thesis's side view (x forward, y up).
@@ -205,6 +206,67 @@ fn fig_6_17() -> Result<Image> {
     Ok(img)
 }
 
+/// The push figure: the walker optimised under pushes with the thesis's machines (`walk-robust.ron`)
+/// and its SIMBICON form (`walk-simbicon.ron`), each pushed 20 N·s forward and backward on the head
+/// 20 s into the walk (the pushes of `nunes-optimisers`), from 0.5 s before the push to 5 s after.
+fn fig_pushes() -> Result<Image> {
+    const IMPULSE: f64 = 20.0;
+    const AT: u64 = 400;
+    const DURATION: u64 = 2;
+    let (first, last, every) = (AT - 10, AT + 100, 5);
+    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
+    let walkers = [
+        ("walk-robust.ron (the thesis's machines)", nunes::WALK_ROBUST_RON),
+        ("walk-simbicon.ron (SIMBICON form)", nunes::WALK_SIMBICON_RON),
+    ];
+    let (width, height) = (1600, 260);
+    let mut panels = Vec::new();
+    for (name, text) in walkers {
+        for direction in [1.0, -1.0] {
+            let push = nunes::Push {
+                at: AT,
+                duration: DURATION,
+                force: [direction * IMPULSE / (DURATION as f64 * nunes::DT), 0.0],
+            };
+            let mut frames = Vec::new();
+            let mut k = 0;
+            // 10 s after the push, as the push survival of `nunes-optimisers` counts it.
+            let out = nunes::walk(nunes::parse(text)?, AT + 200, &rules, &[push], |c| {
+                k += 1;
+                if (first..=last).contains(&k) && (k - first) % every == 0 {
+                    frames.push(capture(c));
+                }
+            })?;
+            let picked: Vec<&Frame> = frames.iter().collect();
+            let (x0, y0, x1, y1) = bounds(picked.iter().copied(), 0.6);
+            let view = View2d::fit(x0, y0, x1, y1, width, height, 8);
+            let mut img = Image::new(width, height, SKY)?;
+            strobe(&mut img, &view, &picked);
+            // An arrow onto the head where the push began.
+            let at = &frames[((AT - first) / every) as usize];
+            if let Some(head) = at.iter().flatten().map(|p| p.centre).max_by(|a, b| a[1].total_cmp(&b[1])) {
+                let tail = [head[0] - direction * 0.6, head[1]];
+                let red = [200, 30, 30];
+                draw_line(&mut img, view.to_px(tail[0], tail[1]), view.to_px(head[0], head[1]), 4.0, red);
+                fill_disc(&mut img, view.to_px(head[0], head[1]), 6.0, red);
+            }
+            img.label(
+                8,
+                6,
+                &format!(
+                    "{name}: {IMPULSE} N·s {} on the head at 20 s; {} 10 s later; a frame every {:.2} s",
+                    if direction > 0.0 { "forward" } else { "backward" },
+                    if out.fell { "fallen" } else { "still walking" },
+                    every as f64 * nunes::DT
+                ),
+                16.0,
+            )?;
+            panels.push(img);
+        }
+    }
+    stack(&panels)
+}
+
 /// Best fitness so far against evaluations, one line per optimiser.
 pub fn fitness_plot(title: &str, y_label: &str, logs: &[(&str, RunLog)]) -> Result<Image> {
     let mut plot = LinePlot::new(title, "evaluations", y_label);
@@ -290,6 +352,8 @@ pub fn figures(save: &dyn Fn(&str, &Image) -> Result<()>) -> Result<()> {
     save("nunes-fig-6-12-throw.png", &fig_6_12().context("Fig. 6.12")?)?;
     eprintln!("xtask: Fig. 6.17 (backflip strobe) …");
     save("nunes-fig-6-17-backflip.png", &fig_6_17().context("Fig. 6.17")?)?;
+    eprintln!("xtask: pushes on the robust and SIMBICON walkers …");
+    save("nunes-pushes.png", &fig_pushes().context("push figure")?)?;
     eprintln!("xtask: walking fitness against evaluations …");
     save("nunes-walk-fitness.png", &walk_fitness_figure()?)?;
     eprintln!("xtask: throwing fitness against evaluations …");

@@ -135,10 +135,10 @@ fn apply(base: &Controller, x: &[f64]) -> Controller {
 const N: u64 = 500;
 
 /// The staged score: reach the hands, rotate, land, stand.
-fn score(c: Controller) -> f64 {
+fn score(c: Controller, spacing: f64) -> f64 {
     let two_pi = 2.0 * std::f64::consts::PI;
     let mut d_min = f64::INFINITY;
-    let out = nunes::backflip(c, nunes::FLIP_SPACING, N, |ch| {
+    let out = nunes::backflip(c, spacing, N, |ch| {
         let (a, p) = (&ch.env.sensors[0], &ch.env.sensors[1]);
         let (Some(f), [Some(hl), Some(hr)]) = (a.layout.feet[0], p.layout.hands) else { return };
         let h = [
@@ -205,7 +205,15 @@ fn main() {
             value(g).clamp(lo, hi)
         })
         .collect();
-    let objective = |x: &[f64]| score(apply(&base, x));
+    // `TUNE_SPACINGS=0.88,0.9,0.92`: the mean score over several spacings of the pair, for a flip
+    // that does not depend on one exact spacing (default: the scene's 0.9 m only).
+    let spacings: Vec<f64> = std::env::var("TUNE_SPACINGS").map_or(vec![nunes::FLIP_SPACING], |v| {
+        v.split(',').map(|x| x.trim().parse().expect("spacing")).collect()
+    });
+    let objective = |x: &[f64]| {
+        let c = apply(&base, x);
+        spacings.iter().map(|&d| score(c.clone(), d)).sum::<f64>() / spacings.len() as f64
+    };
     eprintln!("x0 score {:.3}", objective(&x0));
     let out_path = std::path::Path::new("target/nunes").join(format!("backflip-tuned-{seed}.ron"));
     let _ = std::fs::create_dir_all("target/nunes");
@@ -233,6 +241,14 @@ fn main() {
         {
             best = f;
             let out = nunes::backflip(apply(&base, &x), nunes::FLIP_SPACING, N, |_| ()).expect("flip");
+            let standing: Vec<bool> = spacings
+                .iter()
+                .map(|&d| {
+                    nunes::backflip(apply(&base, &x), d, N, |_| ())
+                        .is_ok_and(|o| o.flipped() && !o.pusher_fell)
+                })
+                .collect();
+            eprintln!("      flips and stands at the spacings {spacings:?}: {standing:?}");
             eprintln!(
                 "{:4} best {f:.3} rot {:.2} fired {:?} landed {:?} standing {}",
                 log.len(),
