@@ -223,11 +223,7 @@ fn fig_pushes() -> Result<Image> {
     let mut panels = Vec::new();
     for (name, text) in walkers {
         for direction in [1.0, -1.0] {
-            let push = nunes::Push {
-                at: AT,
-                duration: DURATION,
-                force: [direction * IMPULSE / (DURATION as f64 * nunes::DT), 0.0],
-            };
+            let push = nunes::Push::impulse(direction * IMPULSE, AT, DURATION);
             let mut frames = Vec::new();
             let mut k = 0;
             // 10 s after the push, as the push survival of `nunes-optimisers` counts it.

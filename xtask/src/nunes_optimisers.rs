@@ -69,7 +69,7 @@ pub fn spec_walker() -> Result<Controller> {
 
 /// A push of `impulse` N·s (positive forward) on the head.
 fn push(impulse: f64, at: u64) -> Push {
-    Push { at, duration: PUSH_ITERATIONS, force: [impulse / (PUSH_ITERATIONS as f64 * nunes::DT), 0.0] }
+    Push::impulse(impulse, at, PUSH_ITERATIONS)
 }
 
 fn survives(c: &Controller, impulse: f64) -> bool {
@@ -309,22 +309,11 @@ fn robust_score(c: &Controller, pushes: &[Push]) -> f64 {
 /// The re-authored walker's own twelve pose numbers, read back from `walk.ron` and clamped into
 /// [`walk_poses::space`].
 fn walker_poses(base: &Controller) -> Vec<f64> {
-    let probe = |label: &str| base.param(base.param_id(label).expect("walker parameter"));
-    let v = [
-        probe("W-LEGS/E1/waist"),
-        probe("W-LEGS/E1/hip_l"),
-        probe("W-LEGS/E1/knee_l"),
-        probe("W-LEGS/E1/ankle_l"),
-        probe("W-LEGS/E1/hip_r"),
-        probe("W-LEGS/E1/knee_r"),
-        probe("W-LEGS/E1/ankle_r"),
-        probe("W-LEGS/E3/hip_l"),
-        probe("W-LEGS/E3/knee_l"),
-        probe("W-LEGS/E3/ankle_l"),
-        probe("W-LEGS/E3/hip_r"),
-        probe("W-LEGS/E3/ankle_r"),
-    ];
-    v.iter().zip(walk_poses::LO.iter().zip(walk_poses::HI)).map(|(&x, (&lo, hi))| x.clamp(lo, hi)).collect()
+    walk_poses::get(base)
+        .iter()
+        .zip(walk_poses::LO.iter().zip(walk_poses::HI))
+        .map(|(&x, (&lo, hi))| x.clamp(lo, hi))
+        .collect()
 }
 
 /// CMA-ES (σ₀ = 0.1 of each interval, no restarts) on the robust objective from `x0`; returns the

@@ -308,7 +308,7 @@ pub mod catalogue {
 
     /// S-COGAHEAD(f): 1 if the centre of mass is more than `p` m ahead of foot `side`'s centre.
     pub fn cog_ahead(s: &Sensors, side: usize, p: f64) -> f64 {
-        on(s.layout.feet[side].is_some_and(|f| s.facing * (s.com[0] - s.body_position[f][0]) > p))
+        on(s.layout.feet[side].is_some() && com_offset(s, side) > p)
     }
 
     /// S-LAND(f): foot `side` touches the ground, OR (AND) the forward centre-of-mass velocity

@@ -68,6 +68,14 @@ pub struct Push {
     pub force: [f64; 2],
 }
 
+impl Push {
+    /// A horizontal push of `impulse` N·s (positive forward, along +x) spread evenly over
+    /// `duration` iterations from iteration `at`.
+    pub fn impulse(impulse: f64, at: u64, duration: u64) -> Self {
+        Self { at, duration, force: [impulse / (duration as f64 * DT), 0.0] }
+    }
+}
+
 /// How a walk ended.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkOutcome {
@@ -193,6 +201,29 @@ pub mod walk_poses {
 
     pub fn space() -> Space {
         Space { dims: NAMES.iter().zip(LO.iter().zip(HI)).map(|(n, (&a, b))| Dim::new(n, a, b)).collect() }
+    }
+
+    /// Reads the pose vector back from a walking controller (E1 and E3; the inverse of [`set`] for a
+    /// symmetric walker).
+    ///
+    /// # Panics
+    /// If the controller is not the walker (a W-LEGS pose entry is missing).
+    pub fn get(c: &Controller) -> [f64; 12] {
+        let get = |label: &str| c.param(c.param_id(label).unwrap_or_else(|| panic!("no parameter {label}")));
+        [
+            get("W-LEGS/E1/waist"),
+            get("W-LEGS/E1/hip_l"),
+            get("W-LEGS/E1/knee_l"),
+            get("W-LEGS/E1/ankle_l"),
+            get("W-LEGS/E1/hip_r"),
+            get("W-LEGS/E1/knee_r"),
+            get("W-LEGS/E1/ankle_r"),
+            get("W-LEGS/E3/hip_l"),
+            get("W-LEGS/E3/knee_l"),
+            get("W-LEGS/E3/ankle_l"),
+            get("W-LEGS/E3/hip_r"),
+            get("W-LEGS/E3/ankle_r"),
+        ]
     }
 
     /// Writes pose vector `x` into a walking controller (E1/E3 and mirrored E4/E6).
@@ -478,7 +509,8 @@ pub struct FlipOutcome {
 impl FlipOutcome {
     /// A complete flip: at least 2π − 0.5 rad backwards, landed on the feet, standing at the end.
     pub fn flipped(&self) -> bool {
-        self.max_rotation >= 2.0 * std::f64::consts::PI - 0.5 && self.standing && !self.touched_down
+        // `standing` already excludes a fall.
+        self.max_rotation >= 2.0 * std::f64::consts::PI - 0.5 && self.standing
     }
 }
 

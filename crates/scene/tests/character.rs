@@ -216,7 +216,7 @@ fn a_hard_push_on_the_head_knocks_the_walker_down() {
     let c = nunes::parse(nunes::WALK_OPTIMISED_RON).unwrap();
     let rules = WalkRules { window: 0, ..WalkRules::default() };
     let run = |impulse: f64| {
-        let push = nunes::Push { at: 400, duration: 2, force: [impulse / (2.0 * nunes::DT), 0.0] };
+        let push = nunes::Push::impulse(impulse, 400, 2);
         nunes::walk(c.clone(), 600, &rules, &[push], |_| ()).unwrap()
     };
     assert!(!run(0.0).fell);
@@ -292,7 +292,7 @@ fn the_robust_walker_survives_20_n_s_pushes_both_ways() {
     let c = nunes::parse(nunes::WALK_ROBUST_RON).unwrap();
     let rules = WalkRules { window: 0, ..WalkRules::default() };
     for impulse in [20.0, -20.0] {
-        let push = nunes::Push { at: 400, duration: 2, force: [impulse / (2.0 * nunes::DT), 0.0] };
+        let push = nunes::Push::impulse(impulse, 400, 2);
         let out = nunes::walk(c.clone(), 600, &rules, &[push], |_| ()).unwrap();
         assert!(!out.fell && out.distance > 10.0, "{impulse} N·s: {out:?}");
     }
