@@ -1,13 +1,13 @@
 //! Every FLEX3D experiment of Nedel 1993 as a test of the criterion the specification gives (spec S6).
 //! The measuring code is the same that `cargo xtask reproduce` prints.
 
-use anima::experiments::{self, ThesisScene};
 use anima_cloth::flex3d::FrictionMode;
+use anima_lab::flex3d::{self, ThesisScene};
 use anima_ode::Integrator;
 
 #[test]
 fn e1_table_4_1_all_66_values_equal_the_printed_digits() {
-    let t = experiments::e1_table_4_1(Integrator::ForwardEuler);
+    let t = flex3d::e1_table_4_1(Integrator::ForwardEuler);
     for (i, (thesis, ours)) in t.thesis.iter().zip(&t.ours).enumerate() {
         for (c, (a, b)) in thesis.iter().zip(ours).enumerate() {
             assert_eq!(a, b, "t = {i}, h = {}: thesis {a}, anima {b}", t.steps[c]);
@@ -37,7 +37,7 @@ fn e1_error_shrinks_tenfold_with_each_tenfold_cut_in_h() {
 
 #[test]
 fn e2_small_steps_agree_and_large_steps_diverge() {
-    let s = experiments::e2_step_sweep(FrictionMode::Literal).unwrap();
+    let s = flex3d::e2_step_sweep(FrictionMode::Literal).unwrap();
     let d = &s.max_deviation;
     assert!(d[2] < 1.0 && d[3] < 1.0, "h = 0.01 and 0.005 must agree with h = 0.001 within 1: {d:?}");
     assert!(d[0] > 5.0 && d[1] > 5.0, "h = 0.1 and 0.05 must be visibly wrong (> 5): {d:?}");
@@ -48,19 +48,19 @@ fn e2_small_steps_agree_and_large_steps_diverge() {
 #[test]
 fn e3_curtain_is_at_rest_by_frame_25() {
     for friction in [FrictionMode::Literal, FrictionMode::Viscous] {
-        let c = experiments::e3_curtain(friction).unwrap();
+        let c = flex3d::e3_curtain(friction).unwrap();
         assert!(c.max_speed[24] < 0.01, "{friction:?}: max speed at frame 25 = {}", c.max_speed[24]);
         assert!(c.max_speed[1] > 1.0, "{friction:?}: the curtain must move early on: {}", c.max_speed[1]);
     }
     // The spec's reconstruction (literal friction): the bottom row settles at y = 12.535.
-    let c = experiments::e3_curtain(FrictionMode::Literal).unwrap();
+    let c = flex3d::e3_curtain(FrictionMode::Literal).unwrap();
     assert!((c.bottom_row_y[24] - 12.535).abs() < 0.01, "bottom row at {}", c.bottom_row_y[24]);
     assert!((c.bottom_row_y[0] - 19.97).abs() < 0.01, "bottom row at t = 1 s: {}", c.bottom_row_y[0]);
 }
 
 #[test]
 fn e4_paper_leaves_its_plane_and_drifts_down() {
-    let s = experiments::peeling_sheet(ThesisScene::Paper, FrictionMode::Literal, true).unwrap();
+    let s = flex3d::peeling_sheet(ThesisScene::Paper, FrictionMode::Literal, true).unwrap();
     for k in 3..=19 {
         assert!(s.min_free_z[k - 1] > 0.0, "frame {k}: a free particle has z = {}", s.min_free_z[k - 1]);
     }
@@ -73,12 +73,12 @@ fn e4_paper_leaves_its_plane_and_drifts_down() {
 
 #[test]
 fn e5_wind_billows_the_sail_downwind() {
-    let w = experiments::e5_wind(true).unwrap();
+    let w = flex3d::e5_wind(true).unwrap();
     assert!(w.min_z.iter().all(|&z| z >= 0.0), "the sheet moved upwind: {:?}", w.min_z);
     assert!((w.z_extent[11] - 46.0).abs() < 1.0, "z extent at frame 12: {}", w.z_extent[11]);
     assert!(w.max_speed_last > 0.1, "still moving at t = 4 s");
     // The spec computed its numbers without collision handling; that run reproduces them exactly.
-    let free = experiments::e5_wind(false).unwrap();
+    let free = flex3d::e5_wind(false).unwrap();
     assert!(
         free.free_corner_furthest.iter().skip(2).all(|&b| b),
         "corner (9, 9) must lead: {:?}",
@@ -89,7 +89,7 @@ fn e5_wind_billows_the_sail_downwind() {
 
 #[test]
 fn e6_theatre_curtains_close_and_reopen_without_touching() {
-    let t = experiments::e6_theatre().unwrap();
+    let t = flex3d::e6_theatre().unwrap();
     assert_eq!(t.frames, 145);
     assert!(t.matches_e3_first_25, "corte must repeat E-3 bit for bit while the rails are still");
     for c in 0..2 {
@@ -111,8 +111,8 @@ fn e6_theatre_curtains_close_and_reopen_without_touching() {
 
 #[test]
 fn e7_cardboard_is_smoother_than_paper() {
-    let paper = experiments::peeling_sheet(ThesisScene::Paper, FrictionMode::Literal, true).unwrap();
-    let card = experiments::peeling_sheet(ThesisScene::Cardboard, FrictionMode::Literal, true).unwrap();
+    let paper = flex3d::peeling_sheet(ThesisScene::Paper, FrictionMode::Literal, true).unwrap();
+    let card = flex3d::peeling_sheet(ThesisScene::Cardboard, FrictionMode::Literal, true).unwrap();
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
     let (c, p) = (mean(&card.mean_bend[2..15]), mean(&paper.mean_bend[2..15]));
     assert!(c < 0.5 * p, "cardboard mean bend {c} against paper {p}");
@@ -124,7 +124,7 @@ fn e7_cardboard_is_smoother_than_paper() {
 #[test]
 fn e8_tablecloth_never_enters_the_table() {
     for friction in [FrictionMode::Literal, FrictionMode::Viscous] {
-        let e = experiments::e8_tablecloth(friction).unwrap();
+        let e = flex3d::e8_tablecloth(friction).unwrap();
         assert_eq!(e.penetrations_total, 0, "{friction:?}: particles found inside the table");
         let t = e.first_contact_time.expect("the cloth reaches the table");
         assert!((1.5..=2.5).contains(&t), "{friction:?}: first contact at {t} s");

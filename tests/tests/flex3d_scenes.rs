@@ -1,8 +1,8 @@
 //! Scene files: the RON conversions of the thesis scripts, determinism, and runs through the CLI library.
 
-use anima::experiments::{ThesisScene, flex3d_assets};
-use anima::runner::{RunOptions, run};
 use anima_cloth::flex3d::Flex3dWorld;
+use anima_lab::flex3d::{ThesisScene, flex3d_assets};
+use anima_lab::run::flex3d::{RunOptions, run};
 use anima_scene::LoadOptions;
 
 /// Runs a loaded scene for `steps` steps and returns the final positions.

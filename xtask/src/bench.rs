@@ -336,7 +336,7 @@ fn plot(title: &str, curves: &[Curve], error_label: &str) -> Result<anima_viz::I
 
 fn save(name: &str, img: &anima_viz::Image) -> Result<()> {
     let path = crate::root().join("docs/figures").join(name);
-    anima::output::write_atomic(&path, |w| Ok(img.write_png(w)?))
+    anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))
 }
 
 fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_label: &str, stable_unit: &str) {
@@ -488,7 +488,7 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
     doc.push_str(&stability_map()?);
 
     let path = crate::root().join("docs/benchmarks.md");
-    anima::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
     eprintln!("xtask: wrote {}", path.display());
     Ok(())
 }

@@ -1,10 +1,10 @@
 //! `cargo xtask figures`: Fig. 4.1 and rendered frames of every FLEX3D scene, Oliveira's drapes and Nunes's
 //! controller figures ([`crate::nunes_figures`]) into `docs/figures/`.
 
-use anima::experiments::{self, ThesisScene, run_to_frame};
-use anima::picture::{camera_along, labelled_frame, scene_bounds};
 use anima_cloth::flex3d::FrictionMode;
 use anima_cloth::flex3d::mass_spring::{SingleSpring, TABLE_4_1_STEPS, trajectory};
+use anima_lab::flex3d::{self, ThesisScene, run_to_frame};
+use anima_lab::picture::{camera_along, labelled_frame, scene_bounds};
 use anima_ode::Integrator;
 use anima_viz::{Image, LinePlot, Series};
 use anyhow::Result;
@@ -14,7 +14,7 @@ pub fn run(only: Option<&str>) -> Result<()> {
     std::fs::create_dir_all(&dir)?;
     let save = |name: &str, img: &Image| -> Result<()> {
         let path = dir.join(name);
-        anima::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
+        anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
         eprintln!("xtask: wrote docs/figures/{name}");
         Ok(())
     };
@@ -80,7 +80,7 @@ fn fine_trajectory(h: f64) -> Vec<(f64, f64)> {
 
 /// Fig. 4.2: frame 12 of the wind scene for the five step sizes.
 fn fig_4_2() -> Result<Image> {
-    let sweep = experiments::e2_step_sweep(FrictionMode::Literal)?;
+    let sweep = flex3d::e2_step_sweep(FrictionMode::Literal)?;
     let (_, world) = ThesisScene::Wind.world(|_| {})?;
     // Frame on the converged shape so the diverged one visibly leaves the picture.
     let bounds = scene_bounds([sweep.frames[4].as_slice(), world.positions()], &[]);

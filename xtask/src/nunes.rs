@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anima_control::optimise::{GreedySearch, Interval, Objective, Optimiser, RunLog, Stage, resume, run};
 use anima_control::{Controller, Selection};
-use anima_scene::nunes::{self, WalkRules};
+use anima_lab::nunes::{self, WalkRules};
 use anyhow::{Context, Result, bail};
 
 /// Seed of every thesis run (the thesis reports none, spec §9).
@@ -93,7 +93,7 @@ pub fn reproduce(which: &str) -> Result<()> {
     }
     if which.is_empty() {
         let path = crate::root().join("docs/reproduction/nunes-results.md");
-        anima::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
+        anima_lab::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
     }
     Ok(())
 }
@@ -149,7 +149,7 @@ fn walk() -> Result<String> {
         best.x.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", ")
     );
     let text = format!("{header}{}", winner.to_ron());
-    anima::output::write_atomic(&crate::root().join("assets/controllers/walk-optimised.ron"), |w| {
+    anima_lab::output::write_atomic(&crate::root().join("assets/controllers/walk-optimised.ron"), |w| {
         Ok(std::io::Write::write_all(w, text.as_bytes())?)
     })?;
 

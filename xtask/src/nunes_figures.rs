@@ -6,14 +6,14 @@
 //! A strobe picture overlays the figure every few control iterations, older frames faded towards the
 //! sky, in the thesis's side view (x forward, y up).
 
-use anima::body_run::{SKY, draw_bodies, draw_ground};
 use anima_body::BodyPose;
+use anima_character::Character;
 use anima_control::Controller;
 use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Optimiser, RandomSearch, RunLog, run,
 };
-use anima_scene::character::Character;
-use anima_scene::nunes::{self, WalkRules};
+use anima_lab::nunes::{self, WalkRules};
+use anima_lab::run::body::{SKY, draw_bodies, draw_ground};
 use anima_viz::{Image, LinePlot, Series, View2d, draw_line, fill_disc};
 use anyhow::{Context, Result};
 

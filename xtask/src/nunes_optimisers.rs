@@ -11,7 +11,7 @@
 //!   ±20 N·s at random times, the same pushes for every candidate: common random numbers) from the
 //!   re-authored walker, written to `assets/controllers/walk-robust.ron`, with the same measurements.
 //! * `cargo xtask reproduce nunes-simbicon`: the same search for the walker with SIMBICON-style
-//!   feedback (`anima_scene::nunes::simbicon`), written to `assets/controllers/walk-simbicon.ron`, and
+//!   feedback (`anima_lab::nunes::simbicon`), written to `assets/controllers/walk-simbicon.ron`, and
 //!   compared with the thesis's machines.
 
 use std::fmt::Write as _;
@@ -21,7 +21,7 @@ use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Interval, Optimiser, RandomSearch, RunLog,
     Stage, run,
 };
-use anima_scene::nunes::{self, Push, WalkRules, walk_poses};
+use anima_lab::nunes::{self, Push, WalkRules, walk_poses};
 use anyhow::Result;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -157,7 +157,7 @@ fn one_run(kind: usize, seed: u64) -> Result<Measured> {
     let dir = crate::root().join("target/nunes/optimisers");
     std::fs::create_dir_all(&dir)?;
     let slug: String = name.chars().filter(char::is_ascii_alphanumeric).collect();
-    anima::output::write_atomic(&dir.join(format!("{slug}-seed{seed}.csv")), |w| {
+    anima_lab::output::write_atomic(&dir.join(format!("{slug}-seed{seed}.csv")), |w| {
         Ok(w.write_all(csv(&log).as_bytes())?)
     })?;
     let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((walk_poses::SPEC.to_vec(), f64::NAN));
@@ -210,7 +210,7 @@ pub fn optimisers(seeds: usize) -> Result<String> {
     writeln!(
         s,
         "`cargo xtask reproduce nunes-optimisers --seeds {seeds}`. Each optimiser searches the twelve symmetric \
-         leg-pose numbers of `anima_scene::nunes::walk_poses` (E1/E3 by swing and stance leg, E4/E6 mirrored) \
+         leg-pose numbers of `anima_lab::nunes::walk_poses` (E1/E3 by swing and stance leg, E4/E6 mirrored) \
          from the spec's §8.1.2 proposal, with which our humanoid falls ({:.2} m, {} of 1000 iterations), for \
          {BUDGET} evaluations per run, seeds 0–{}. The score of an evaluation is {COMPLETED} + the distance for a \
          completed 50 s walk (1000 iterations, no fall, no stop), else the distance before the failure plus 5 × \
@@ -279,7 +279,7 @@ pub fn optimisers(seeds: usize) -> Result<String> {
         "\nThe best-so-far score of every run is in `target/nunes/optimisers/<optimiser>-seed<k>.csv`.\n"
     )?;
     let path = crate::root().join("docs/reproduction/nunes-optimisers.md");
-    anima::output::write_atomic(&path, |w| Ok(w.write_all(s.as_bytes())?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(s.as_bytes())?))?;
     eprintln!("xtask: wrote {}", path.display());
     Ok(s)
 }
@@ -401,12 +401,12 @@ pub fn robust() -> Result<String> {
     let path = crate::root().join("assets/controllers/walk-robust.ron");
     let text = format!(
         "// Written by `cargo xtask reproduce nunes-robust`: walk.ron with its twelve symmetric leg-pose numbers\n\
-         // (anima_scene::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{ROBUST_IMPULSE} N·s head\n\
+         // (anima_lab::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{ROBUST_IMPULSE} N·s head\n\
          // pushes at random times (common random numbers, seed {}).\n{}",
         crate::nunes::SEED,
         winner.to_ron()
     );
-    anima::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
     let mut s = String::new();
     writeln!(s, "## A walker optimised for pushes (CMA-ES, robust objective)\n")?;
     writeln!(
@@ -485,7 +485,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
     let path = crate::root().join("assets/controllers/walk-simbicon.ron");
     let text = format!(
         "// Written by `cargo xtask reproduce nunes-simbicon`: walk.ron's machines with SIMBICON-style balance\n\
-         // feedback (anima_scene::nunes::simbicon): the swing hip's world angle θ₀ + c_d·d + c_v·v and the trunk at a\n\
+         // feedback (anima_lab::nunes::simbicon): the swing hip's world angle θ₀ + c_d·d + c_v·v and the trunk at a\n\
          // world angle. c_d = {:.3}, c_v = {:.3} and the twelve leg-pose numbers found by CMA-ES on the mean walking\n\
          // score over six ±{ROBUST_IMPULSE} N·s head pushes (common random numbers, seed {}).\n{}",
         best[12],
@@ -493,7 +493,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
         crate::nunes::SEED,
         winner.to_ron()
     );
-    anima::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
     let mut s = String::new();
     writeln!(s, "## SIMBICON-style feedback against the thesis's machines\n")?;
     writeln!(

@@ -391,7 +391,7 @@ pub fn reproduce(which: &str) -> Result<()> {
     if only.is_none() {
         let path = crate::root().join("docs/reproduction/oliveira-adaptive.md");
         let full = format!("{HEADER}{doc}{NOTES}");
-        anima::output::write_atomic(&path, |w| Ok(w.write_all(full.as_bytes())?))?;
+        anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(full.as_bytes())?))?;
         eprintln!("xtask: wrote {}", path.display());
     }
     Ok(())
@@ -871,7 +871,7 @@ fn figures(test: &Test, runs: &[Run]) -> Result<Vec<(String, String)>> {
     let dir = crate::root().join("docs/figures");
     std::fs::create_dir_all(&dir)?;
     let save = |name: String, img: &Image| -> Result<String> {
-        anima::output::write_atomic(&dir.join(&name), |w| Ok(img.write_png(w)?))?;
+        anima_lab::output::write_atomic(&dir.join(&name), |w| Ok(img.write_png(w)?))?;
         Ok(name)
     };
     let n = test.number;

@@ -267,7 +267,7 @@ pub fn reproduce() -> Result<()> {
         section(&mut doc, d, &rows)?;
     }
     let path = crate::root().join("docs/reproduction/oliveira-implicit.md");
-    anima::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
     eprintln!("xtask: wrote {}", path.display());
     Ok(())
 }
@@ -359,7 +359,7 @@ fn section(doc: &mut String, d: &Drape, rows: &[Row]) -> Result<()> {
     }
     let img = plot.render(900, 600)?;
     let path = crate::root().join("docs/figures").join(&png);
-    anima::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
+    anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
     let _ = writeln!(doc, "![{}](../figures/{png})\n", d.slug);
     Ok(())
 }

@@ -2,8 +2,8 @@
 
 use std::fmt::Write as _;
 
-use anima::experiments::{self, ThesisScene};
 use anima_cloth::flex3d::FrictionMode;
+use anima_lab::flex3d::{self, ThesisScene};
 use anima_ode::Integrator;
 use anyhow::{Result, bail};
 
@@ -59,7 +59,7 @@ pub fn run(experiment: &str, friction: &str, seeds: Option<usize>) -> Result<()>
              nunes-simbicon`.\n\n{text}"
         );
         let path = crate::root().join("docs/reproduction/nunes-simbicon.md");
-        anima::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
+        anima_lab::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
         return Ok(());
     }
     if experiment == "nunes-robust" {
@@ -111,7 +111,7 @@ pub fn run(experiment: &str, friction: &str, seeds: Option<usize>) -> Result<()>
              (friction reading: {friction:?}); do not edit. The claims, reconstructions and figures are in \
              [flex3d.md](flex3d.md)._\n\n"
         );
-        anima::output::write_atomic(&path, |w| Ok(w.write_all((header + &doc).as_bytes())?))?;
+        anima_lab::output::write_atomic(&path, |w| Ok(w.write_all((header + &doc).as_bytes())?))?;
         eprintln!("xtask: wrote {}", path.display());
     }
     if !failed.is_empty() {
@@ -121,7 +121,7 @@ pub fn run(experiment: &str, friction: &str, seeds: Option<usize>) -> Result<()>
 }
 
 fn table_4_1() -> Report {
-    let t = experiments::e1_table_4_1(Integrator::ForwardEuler);
+    let t = flex3d::e1_table_4_1(Integrator::ForwardEuler);
     let mut r = Report::new("E-1 — Table 4.1: one spring under forward Euler");
     r.line("Each cell: thesis / anima (forward Euler, position from the old velocity, f64, truncated to 4 decimals).\n");
     let mut head = "| t |".to_owned();
@@ -141,17 +141,17 @@ fn table_4_1() -> Report {
     r.line("");
     r.criteria_header();
     r.check("all 66 values equal to the printed digits", format!("{} of 66", t.matches), t.matches == 66);
-    let se = experiments::e1_table_4_1(Integrator::SymplecticEuler);
+    let se = flex3d::e1_table_4_1(Integrator::SymplecticEuler);
     r.line(format!(
         "\nFor contrast, symplectic Euler matches {} of 66 and RK4 {} of 66: the thesis ran forward Euler.",
         se.matches,
-        experiments::e1_table_4_1(Integrator::Rk4).matches
+        flex3d::e1_table_4_1(Integrator::Rk4).matches
     ));
     r
 }
 
 fn e2(friction: FrictionMode) -> Result<Report> {
-    let s = experiments::e2_step_sweep(friction)?;
+    let s = flex3d::e2_step_sweep(friction)?;
     let mut r = Report::new("E-2 — Fig. 4.2: step size on the wind scene, frame 12");
     r.line("Thesis: h = 0.1 unrecognisable; h = 0.05 large error but recognisable; h = 0.01, 0.005, 0.001 almost identical.\n");
     r.line(
@@ -172,7 +172,7 @@ fn e2(friction: FrictionMode) -> Result<Report> {
 }
 
 fn e3(friction: FrictionMode) -> Result<Report> {
-    let c = experiments::e3_curtain(friction)?;
+    let c = flex3d::e3_curtain(friction)?;
     let mut r = Report::new("E-3 — Figs. 6.1/6.2: the curtain comes to rest by frame 25");
     r.line("Thesis: by frame 25 the surface has reached rest.\n");
     r.line("| frame | 1 | 2 | 3 | 5 | 10 | 15 | 20 | 25 |");
@@ -197,7 +197,7 @@ fn e3(friction: FrictionMode) -> Result<Report> {
 }
 
 fn peeling(scene: ThesisScene, friction: FrictionMode) -> Result<Report> {
-    let s = experiments::peeling_sheet(scene, friction, true)?;
+    let s = flex3d::peeling_sheet(scene, friction, true)?;
     let paper = scene == ThesisScene::Paper;
     let mut r = Report::new(if paper {
         "E-4 — Figs. 6.3/6.4: paper projecting out of a plane"
@@ -232,7 +232,7 @@ fn peeling(scene: ThesisScene, friction: FrictionMode) -> Result<Report> {
         let max_speed = s.max_speed.iter().copied().fold(0.0, f64::max);
         r.check("motion stays bounded", format!("max speed {max_speed:.2}"), max_speed < 50.0);
     } else {
-        let paper = experiments::peeling_sheet(ThesisScene::Paper, friction, true)?;
+        let paper = flex3d::peeling_sheet(ThesisScene::Paper, friction, true)?;
         let (ours, theirs) = (mean(&s.mean_bend[2..15]), mean(&paper.mean_bend[2..15]));
         r.check(
             "smoother than E-4: mean bend over frames 3–15",
@@ -260,8 +260,8 @@ fn mean(x: &[f64]) -> f64 {
 }
 
 fn e5() -> Result<Report> {
-    let w = experiments::e5_wind(true)?;
-    let free = experiments::e5_wind(false)?;
+    let w = flex3d::e5_wind(true)?;
+    let free = flex3d::e5_wind(false)?;
     let mut r = Report::new("E-5 — Figs. A2.1/A2.2: a surface in the wind");
     r.line("Thesis: the sheet billows in +z like a sail held at three corners (frames 3–19 shown).");
     r.line(
@@ -319,7 +319,7 @@ fn e5() -> Result<Report> {
 }
 
 fn e6() -> Result<Report> {
-    let t = experiments::e6_theatre()?;
+    let t = flex3d::e6_theatre()?;
     let mut r = Report::new("E-6 — Figs. A2.3/A2.4: theatre curtains close and reopen");
     r.line(
         "Thesis: 145 frames; the curtains settle, close (25–78 s), pause, reopen (100–140 s) and settle.\n",
@@ -362,7 +362,7 @@ fn e6() -> Result<Report> {
 }
 
 fn e8(friction: FrictionMode) -> Result<Report> {
-    let e = experiments::e8_tablecloth(friction)?;
+    let e = flex3d::e8_tablecloth(friction)?;
     let mut r = Report::new("E-8 — Figs. A2.7/A2.8: a tablecloth falls on a table");
     r.line("Thesis: the cloth falls, hits the table, rests on the top and drapes down the sides with folds at the corners.\n");
     r.criteria_header();

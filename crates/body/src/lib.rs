@@ -22,7 +22,6 @@
 mod actuator;
 mod dense;
 mod error;
-mod ron_path;
 pub mod scene;
 pub mod sensors;
 mod skeleton;

@@ -6,8 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::actuator::{CommandError, Signal, Target, TargetFrame};
 use crate::error::{BodyError, SkeletonError};
-use crate::ron_path;
-use crate::skeleton::{Actuation, BuiltinSkeleton, Skeleton, syntax_error};
+use crate::skeleton::{Actuation, BuiltinSkeleton, Skeleton};
 use crate::world::{Placement, World, WorldSettings};
 
 /// Errors in a scene file: the same shape as skeleton errors (line, field, message).
@@ -59,33 +58,15 @@ pub struct BodyScene {
 }
 
 impl BodyScene {
-    /// Whether `text`'s top-level value is a `BodyScene(…)` (comments and blank space skipped). The
-    /// `anima` command uses this to tell body scenes from its other RON scenes without parsing twice.
+    /// Whether `text`'s top-level value is a `BodyScene(…)` (comments and blank space skipped).
     pub fn is_body_scene(text: &str) -> bool {
-        let mut rest = text;
-        loop {
-            rest = rest.trim_start();
-            if let Some(r) = rest.strip_prefix("//") {
-                rest = r.split_once('\n').map_or("", |(_, r)| r);
-            } else if let Some(r) = rest.strip_prefix("/*") {
-                rest = r.split_once("*/").map_or("", |(_, r)| r);
-            } else if let Some(r) = rest.strip_prefix("#![") {
-                // ron extension attributes, e.g. #![enable(implicit_some)]
-                rest = r.split_once(']').map_or("", |(_, r)| r);
-            } else {
-                break;
-            }
-        }
-        rest.strip_prefix("BodyScene").is_some_and(|r| r.trim_start().starts_with('('))
+        anima_format::ron_text::struct_name(text) == Some("BodyScene")
     }
 
     /// Parses and checks a scene. Errors name the line and the field.
     pub fn from_ron_str(text: &str) -> Result<Self, SceneError> {
-        let scene: BodyScene = ron::from_str(text).map_err(|e| syntax_error(text, &e))?;
-        scene.check().map_err(|mut e| {
-            e.line = ron_path::line_of(text, &e.field);
-            e
-        })?;
+        let scene: BodyScene = ron::from_str(text).map_err(|e| SkeletonError::syntax(text, &e))?;
+        scene.check().map_err(|e| e.locate(text))?;
         Ok(scene)
     }
 

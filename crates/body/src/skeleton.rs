@@ -7,8 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{SkeletonError, SkeletonErrorKind};
-use crate::ron_path;
+use crate::error::SkeletonError;
 
 /// Body shapes. Planar: every shape is extruded over the skeleton's `depth` along z, which matters
 /// only for drawing and for the (irrelevant) inertia about x and y.
@@ -335,11 +334,8 @@ impl BuiltinSkeleton {
 impl Skeleton {
     /// Parses and checks a RON skeleton. Errors name the line and the field (`bodies[3].mass`).
     pub fn from_ron_str(text: &str) -> Result<Self, SkeletonError> {
-        let desc: SkeletonDesc = ron::from_str(text).map_err(|e| syntax_error(text, &e))?;
-        Skeleton::new(desc).map_err(|mut e| {
-            e.line = ron_path::line_of(text, &e.field);
-            e
-        })
+        let desc: SkeletonDesc = ron::from_str(text).map_err(|e| SkeletonError::syntax(text, &e))?;
+        Skeleton::new(desc).map_err(|e| e.locate(text))
     }
 
     /// Checks a skeleton description.
@@ -742,27 +738,5 @@ fn check_non_negative(field: &str, v: f64) -> Result<(), SkeletonError> {
         Ok(())
     } else {
         Err(SkeletonError::invalid(field, format!("expected zero or a positive number, found {v}")))
-    }
-}
-
-/// A ron error with the path of the field being read. A missing field is reported by ron at the end of
-/// the struct that lacks it, so its path is that struct's plus the field's name.
-pub(crate) fn syntax_error(text: &str, e: &ron::error::SpannedError) -> SkeletonError {
-    let (line, column) = (e.span.start.line, e.span.start.col);
-    let mut field = ron_path::path_at(text, line, column);
-    if let ron::Error::MissingStructField { field: missing, .. } = &e.code {
-        // At the closing bracket the innermost frame is already the struct, whose last field is set.
-        let outer = match field.rfind(['.', '[']) {
-            Some(cut) if !field[cut..].starts_with('[') => field[..cut].to_string(),
-            _ => field.clone(),
-        };
-        field = if outer.is_empty() { missing.to_string() } else { format!("{outer}.{missing}") };
-    }
-    SkeletonError {
-        kind: SkeletonErrorKind::Syntax,
-        field,
-        line: Some(line),
-        column: Some(column),
-        message: e.code.to_string(),
     }
 }

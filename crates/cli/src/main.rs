@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anima::runner::{RunOptions, run, write_summary};
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
 use anima_geom::DVec3;
+use anima_lab::run::flex3d::{RunOptions, run, write_summary};
 use anima_ode::Integrator;
 use anima_scene::{LoadOptions, LoadedScene};
 use anyhow::{Context, Result, bail};
@@ -168,7 +168,7 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
     if let Some(d) = args.duration {
         scene.duration_s = d;
     }
-    let opts = anima::sheet_run::SheetRunOptions {
+    let opts = anima_lab::run::sheet::SheetRunOptions {
         out_dir: Some(args.out.clone()),
         reference: args.reference.clone(),
         write_frames: !args.no_frames,
@@ -187,9 +187,9 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
             scene.integrator
         );
     }
-    let s = anima::sheet_run::run_sheet(&scene, &path.display().to_string(), &opts)?;
+    let s = anima_lab::run::sheet::run_sheet(&scene, &path.display().to_string(), &opts)?;
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
-    anima::output::write_atomic(&summary_path, |w| {
+    anima_lab::output::write_atomic(&summary_path, |w| {
         serde_json::to_writer_pretty(&mut *w, &s)?;
         Ok(w.write_all(b"\n")?)
     })?;
@@ -212,16 +212,16 @@ fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode>
 
 fn run_command(args: RunArgs) -> Result<ExitCode> {
     // A RON file whose top-level value is `BodyScene(…)` is an articulated-figure scene.
-    if let Some(path) = args.scene.as_deref().filter(|p| anima::body_run::is_body_scene_file(p)) {
+    if let Some(path) = args.scene.as_deref().filter(|p| anima_lab::run::body::is_body_scene_file(p)) {
         let progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let opts = anima::body_run::BodyRunOptions {
+        let opts = anima_lab::run::body::BodyRunOptions {
             out_dir: Some(args.out.clone()),
             pictures: !args.no_pictures,
             dt: args.dt,
             duration: args.duration,
             progress,
         };
-        return anima::body_run::run_command(path, &args.out, args.summary.as_deref(), opts, args.quiet);
+        return anima_lab::run::body::run_command(path, &args.out, args.summary.as_deref(), opts, args.quiet);
     }
     if let Some(path) =
         args.scene.as_ref().filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")))
@@ -334,7 +334,7 @@ fn convert_command(input: &Path, output: Option<PathBuf>, gravity: Option<DVec3>
     let name = input.display().to_string();
     let ron = anima_scene::convert_par_to_ron(&bytes, &name, gravity.unwrap_or(FLEX3D_GRAVITY))?;
     let out = output.unwrap_or_else(|| input.with_extension("ron"));
-    anima::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;
+    anima_lab::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;
     eprintln!("anima: wrote {}", out.display());
     Ok(())
 }

@@ -10,10 +10,7 @@
 //! writes `.OBT`). It checks what the grammar and the specification's validation rules say (counts,
 //! index ranges, positive times and masses); whether a scene is physically sensible is not its business.
 
-pub mod character;
-mod error;
 mod load;
-pub mod nunes;
 pub mod oliveira;
 pub mod par;
 pub mod ron_scene;
@@ -21,6 +18,6 @@ pub mod sheet;
 mod text;
 
 pub use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dScene};
-pub use error::{END_OF_FILE, ParseError};
+pub use anima_format::{END_OF_FILE, ParseError};
 pub use load::{LoadOptions, LoadedScene, SceneError, convert_par_to_ron, load};
 pub use text::decode;

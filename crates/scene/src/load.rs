@@ -8,6 +8,8 @@ use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dScene};
 use anima_geom::obt::{IndexBase, ObtError, read_obt};
 use anima_geom::{DVec3, MeshError, TriangleMesh};
 
+use anima_format::utf8;
+
 use crate::{ParseError, par, ron_scene};
 
 /// Choices the caller makes over the file.
@@ -105,17 +107,6 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> 
 pub fn convert_par_to_ron(src_bytes: &[u8], file_name: &str, gravity: DVec3) -> Result<String, ParseError> {
     let script = par::parse(src_bytes).map_err(|e| e.with_file(file_name))?;
     Ok(ron_scene::to_ron_string(&script.to_scene(gravity)))
-}
-
-/// RON is UTF-8 by definition, so unlike `.PAR` there is no Latin-1 fallback; the error points at the
-/// first bad byte.
-pub(crate) fn utf8(bytes: &[u8]) -> Result<&str, ParseError> {
-    std::str::from_utf8(bytes).map_err(|e| {
-        let good = std::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default();
-        let line = 1 + good.matches('\n').count();
-        let column = 1 + good.rsplit('\n').next().unwrap_or_default().chars().count();
-        ParseError::new(line, column, "UTF-8 text", format!("byte 0x{:02X}", bytes[e.valid_up_to()]))
-    })
 }
 
 /// The exact name first, then a case-insensitive match in the same folder (spec S2.5: A2.8 writes

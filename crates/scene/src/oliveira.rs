@@ -9,8 +9,7 @@ use anima_cloth::oliveira::{BuildError, OliveiraCloth, OliveiraScene, ShapeDesc}
 use anima_geom::{ObjError, TriangleMesh, read_obj};
 
 use crate::ParseError;
-use crate::load::utf8;
-use crate::ron_scene::parse_error;
+use anima_format::utf8;
 
 /// The comment every written scene starts with.
 const HEADER: &str = "// anima Oliveira 2013 drape. Units are SI (s, m, kg, N); z is up.\n";
@@ -54,7 +53,7 @@ pub enum OliveiraSceneError {
 
 /// Reads a scene from RON text. Errors carry the line and column, what was expected and what was found.
 pub fn from_ron_str(src: &str) -> Result<OliveiraScene, ParseError> {
-    ron::Options::default().from_str(src).map_err(|e| parse_error(src, e))
+    anima_format::ron_text::from_str(src)
 }
 
 /// Writes a scene as pretty RON after a header comment; [`from_ron_str`] reads back the same scene.

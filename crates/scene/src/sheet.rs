@@ -7,7 +7,6 @@ use anima_ode::Integrator;
 use serde::{Deserialize, Serialize};
 
 use crate::ParseError;
-use crate::ron_scene::parse_error;
 
 /// A sheet and how to run it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -38,7 +37,7 @@ impl SheetScene {
 
 /// Reads a sheet scene; errors name line and column.
 pub fn from_ron_str(src: &str) -> Result<SheetScene, ParseError> {
-    ron::Options::default().from_str(src).map_err(|e| parse_error(src, e))
+    anima_format::ron_text::from_str(src)
 }
 
 /// Writes a sheet scene as pretty RON, with its struct name so that its kind is recognisable.

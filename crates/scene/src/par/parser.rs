@@ -6,8 +6,8 @@ use anima_geom::DVec3;
 
 use super::lexer::{Keyword, Token, TokenKind, Tokens};
 use super::{Curvature, ParScript, ParSurface};
+use crate::END_OF_FILE;
 use crate::ParseError;
-use crate::error::END_OF_FILE;
 
 type Result<T> = std::result::Result<T, ParseError>;
 

@@ -6,8 +6,8 @@
 //! `cargo run --release -p anima-scene --example tune_walk -- [evaluations] [iterations]`
 use anima_control::Selection;
 use anima_control::optimise::{Cmaes, CmaesConfig, RunLog, run};
-use anima_scene::nunes::walk_poses::{self, set as set_poses};
-use anima_scene::nunes::{self, WalkRules};
+use anima_lab::nunes::walk_poses::{self, set as set_poses};
+use anima_lab::nunes::{self, WalkRules};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -1,6 +1,6 @@
 //! Walks a controller file and prints how far it got: `cargo run --release -p anima-scene --example
 //! walk_probe -- assets/controllers/walk.ron [iterations] [p2 p3 p5 p6]`.
-use anima_scene::nunes::{self, WalkRules};
+use anima_lab::nunes::{self, WalkRules};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -114,7 +114,7 @@ pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Res
     let n_frames = ((scene.duration_s * scene.frame_rate_hz).round() as usize).max(1);
     let bar = opts.progress.then(|| indicatif::ProgressBar::new(n_steps as u64));
     let mut snapshots: Vec<(usize, f64, Vec<DVec3>)> = Vec::new();
-    let shown = crate::runner::sheet_frames(n_frames);
+    let shown = crate::run::flex3d::sheet_frames(n_frames);
     let start = Instant::now();
     let mut error = None;
     let mut frames = 0;

@@ -7,7 +7,7 @@
 //! `cargo run --release -p anima-scene --example tune_flip -- [evaluations] [seed] [label=value…]`
 use anima_control::Controller;
 use anima_control::optimise::{Cmaes, CmaesConfig, Dim, RunLog, Space, run};
-use anima_scene::nunes;
+use anima_lab::nunes;
 
 /// One tuned number: the parameters it sets (a pair for symmetric joints), its interval.
 struct Gene {

@@ -9,7 +9,7 @@ use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::Result;
 
 use crate::output::write_atomic;
-use crate::runner::Snapshot;
+use crate::run::flex3d::Snapshot;
 
 /// Surface colours, in scene order (cloth-like tones; the table is wood brown).
 const SURFACE_COLOURS: [[u8; 3]; 4] = [[200, 70, 70], [70, 110, 190], [90, 160, 90], [200, 160, 60]];

@@ -1,6 +1,6 @@
 //! Runs the assisted backflip (`assets/controllers/backflip.ron`) and prints the acrobat's path:
 //! `cargo run --release -p anima-scene --example flip_probe -- [iterations] [spacing]`.
-use anima_scene::nunes;
+use anima_lab::nunes;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

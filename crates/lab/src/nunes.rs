@@ -5,7 +5,7 @@
 use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, SolverSettings, World, WorldSettings};
 use anima_control::Controller;
 
-use crate::character::{Character, CharacterError, procedures};
+use anima_character::{Character, CharacterError, procedures};
 
 /// The shipped controllers, embedded so tests and tools need no paths.
 pub const WALK_RON: &str = include_str!("../../../assets/controllers/walk.ron");
@@ -270,7 +270,7 @@ pub mod simbicon {
     use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
 
     use super::walk_poses;
-    use crate::character::{CharacterError, procedures};
+    use anima_character::{CharacterError, procedures};
 
     /// The two feedback gains, after the twelve [`walk_poses`] numbers (whose swing-hip entries
     /// become the world-frame θ₀, and whose waist entry the trunk's world angle).

@@ -1,9 +1,9 @@
-//! The controller–body adapter (`anima_scene::character`) and the Nunes 2006 experiments built on it.
+//! The controller–body adapter (`anima_character`) and the Nunes 2006 experiments built on it.
 
 use anima_body::sensors::catalogue;
 use anima_body::{Target, TargetFrame};
 use anima_control::{SensorInput, SensorQuery};
-use anima_scene::nunes::{self, WalkRules};
+use anima_lab::nunes::{self, WalkRules};
 
 const SMALL: &str = r#"Controller(
     name: "probe",

@@ -1,13 +1,15 @@
-//! Characters: an anima-control [`Controller`] driving the articulated models of an anima-body
-//! [`World`] — the adapter between the two crates (spec §3.2, §6.9).
+//! Characters: an `anima-control` [`Controller`] driving the articulated models of an `anima-body`
+//! [`World`] — the adapter between the two crates (Nunes 2006, spec §3.2, §6.9), and the only crate that
+//! knows both.
+//!
+//! # What this crate is
 //!
 //! Each control iteration of Δt (0.05 s in the thesis, spec §3.1–§3.2):
 //!
 //! 1. every model is sensed into its [`Sensors`] reading (no allocation);
 //! 2. the controller steps: its sensor queries are answered by the body's sensor catalogue
-//!    ([`sensors::catalogue`]), through a binding made once per sensor when the character is built;
-//!    its procedures act on the world (`release_ball` releases the hand–ball welds, `push` applies a
-//!    force);
+//!    ([`catalogue`]), through a binding made once per sensor when the character is built; its
+//!    procedures act on the world (`release_ball` releases the hand–ball welds, `push` applies a force);
 //! 3. its target signals become the models' actuator [`Commands`](anima_body::Commands), one
 //!    [`Signal`] per signal, which the body averages by Eqs. 5.1–5.2;
 //! 4. the world advances Δt in its physics sub-steps (`WorldSettings::substeps`).
@@ -16,6 +18,39 @@
 //! (`acrobat/hip_l`, `pusher/hip_l`) with the aliases given when the character is built. Sensor
 //! arguments that are model aliases select the model; `left`/`right` select the side; `or`/`and`
 //! combine the landing tests.
+//!
+//! # What it is not
+//!
+//! No files (scene files that name a skeleton and a controller are read by `anima-scene`), no
+//! evaluators or objectives (the thesis's walking, throwing and backflip measures live in `anima-lab`).
+//!
+//! # Use
+//!
+//! ```
+//! use anima_body::{BuiltinSkeleton, Placement, World, WorldSettings};
+//! use anima_character::{Character, procedures};
+//! use anima_control::Controller;
+//!
+//! let text = r#"Controller(
+//!     name: "kneel",
+//!     actuators: ["knee_l", "knee_r"],
+//!     machines: [Machine(
+//!         name: "M", kind: Constant,
+//!         states: [State(name: "E1", pose: [("knee_l", Angle(-0.6)), ("knee_r", Angle(-0.6))])],
+//!         transitions: [Transition(when: Temporal(1000), delay: 10)],
+//!     )],
+//! )"#;
+//! let procedures = procedures();
+//! let controller = Controller::from_ron(text, &procedures).unwrap();
+//! let mut world = World::new(WorldSettings::thesis()).unwrap();
+//! world.add_model(&BuiltinSkeleton::Humanoid.load(), Placement::OnGround { dx: 0.0 }).unwrap();
+//! let mut character = Character::new(world, controller, procedures, &[]).unwrap();
+//! for _ in 0..20 {
+//!     character.step().unwrap(); // one control iteration of 0.05 s
+//! }
+//! let knee = character.env.world.skeleton(0).unwrap().actuator_index("knee_l").unwrap();
+//! assert!(character.env.sensors[0].actuator_angle[knee] < 0.0, "the knees bend towards their target");
+//! ```
 
 use anima_body::sensors::catalogue::{self, LandCombine};
 use anima_body::{BodyError, Sensors, Signal, Target, TargetFrame, World};
@@ -26,12 +61,12 @@ use anima_control::{
 /// What can go wrong when a controller is bound to a world.
 #[derive(Debug, thiserror::Error)]
 pub enum CharacterError {
+    /// A controller or skeleton description that is not valid (both report [`ControllerError`]'s
+    /// located form).
     #[error(transparent)]
-    Controller(#[from] ControllerError),
+    Description(#[from] ControllerError),
     #[error(transparent)]
     Body(#[from] BodyError),
-    #[error(transparent)]
-    Skeleton(#[from] anima_body::SkeletonError),
     #[error("controller actuator `{0}` names no actuator of the world's models")]
     Actuator(String),
     #[error("sensor `{name}`: {why}")]
