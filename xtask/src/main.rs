@@ -1,19 +1,11 @@
-//! `cargo xtask`: reproduce the thesis experiments beside the thesis's own numbers and regenerate every
-//! figure in `docs/figures/`.
+//! `cargo xtask`: reproduce the thesis experiments beside the thesis's own numbers, regenerate every
+//! figure in `docs/figures/` and run the benchmarks. Every experiment is a function of `anima-lab`; this
+//! binary only parses the command and names the repository the reports are written into.
 
-mod bench;
-mod figures;
-mod nunes;
-mod nunes_figures;
-mod nunes_optimisers;
-mod oliveira;
-mod oliveira_adaptive;
-mod oliveira_implicit;
-mod reproduce;
-
-use std::path::PathBuf;
-
-use anyhow::Result;
+use anima_cloth::flex3d::FrictionMode;
+use anima_lab::repo::Repo;
+use anima_lab::{bench, figures, flex3d, nunes, oliveira};
+use anyhow::{Result, bail};
 use clap::{Parser, Subcommand};
 
 #[derive(Debug, Parser)]
@@ -23,25 +15,34 @@ struct Cli {
     command: Command,
 }
 
+/// The friction reading of the FLEX3D experiments.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Friction {
+    /// A fraction of the resultant force, against the motion (the thesis's text).
+    Literal,
+    /// −μv (the viscous reading).
+    Viscous,
+}
+
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Re-run a thesis experiment and print the thesis's numbers beside ours:
-    /// table-4-1, e-2 … e-8, or all (which also writes docs/reproduction/flex3d-results.md).
-    /// Oliveira 2013's drapes on static meshes: oliveira-1, oliveira-2, oliveira-3, or oliveira (all three,
-    /// which also writes docs/reproduction/oliveira-results.md); oliveira-implicit: the fine drapes with
-    /// implicit integrators against a converged reference (docs/reproduction/oliveira-implicit.md).
-    /// Nunes 2006's controllers: nunes-walk, nunes-throw, nunes-flip, or nunes (all, which also writes
-    /// docs/reproduction/nunes-results.md); beyond the thesis: nunes-optimisers (four optimisers over
-    /// --seeds seeds, docs/reproduction/nunes-optimisers.md), nunes-robust (CMA-ES over pushes,
-    /// assets/controllers/walk-robust.ron) and nunes-simbicon (the same with balance feedback,
-    /// docs/reproduction/nunes-simbicon.md, assets/controllers/walk-simbicon.ron).
+    /// Re-run a thesis experiment and print the thesis's numbers beside ours, writing its section of the
+    /// report (a partial run rewrites only its own sections).
+    ///
+    /// FLEX3D (docs/reproduction/flex3d-results.md): table-4-1, e-1 … e-8, or all.
+    /// Oliveira 2013 (oliveira-results.md): oliveira-1, oliveira-2, oliveira-3, or oliveira; with
+    /// --adaptive the remeshers (oliveira-adaptive.md); oliveira-implicit: the fine drapes with implicit
+    /// integrators (oliveira-implicit.md).
+    /// Nunes 2006 (nunes-results.md): nunes-walk, nunes-throw, nunes-flip, or nunes; beyond the thesis:
+    /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
+    /// assets/controllers/walk-robust.ron) and nunes-simbicon (the same with balance feedback).
     Reproduce {
         experiment: String,
-        /// Friction reading for the scene experiments: literal (default) or viscous.
-        #[arg(long, default_value = "literal")]
-        friction: String,
-        /// With oliveira[-N]: the adaptive runs (uniform meshes and three remeshers), written to
-        /// docs/reproduction/oliveira-adaptive.md.
+        /// Friction reading for the FLEX3D experiments (the report holds the literal reading's results;
+        /// with viscous they are printed only).
+        #[arg(long, value_enum, default_value_t = Friction::Literal)]
+        friction: Friction,
+        /// With oliveira[-N]: the adaptive runs (uniform meshes and three remeshers).
         #[arg(long)]
         adaptive: bool,
         /// With nunes-optimisers: seeds per optimiser (default 10); with nunes-simbicon: CMA-ES seeds
@@ -49,8 +50,8 @@ enum Command {
         #[arg(long)]
         seeds: Option<usize>,
     },
-    /// Regenerate every reference plot and figure scene into docs/figures/ (a few minutes);
-    /// `--only nunes` draws only the controller figures (strobe pictures and optimiser comparisons).
+    /// Regenerate every reference plot and figure scene into docs/figures/ (a few minutes); `--only`
+    /// draws one group: flex3d, oliveira or nunes.
     Figures {
         #[arg(long)]
         only: Option<String>,
@@ -67,21 +68,66 @@ enum Command {
     },
 }
 
-/// The repository root (xtask lives one folder below it).
-pub fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+fn reproduce(
+    repo: &Repo,
+    experiment: &str,
+    friction: Friction,
+    adaptive: bool,
+    seeds: Option<usize>,
+) -> Result<()> {
+    if adaptive {
+        return match experiment.strip_prefix("oliveira") {
+            Some(which) => oliveira::adaptive::reproduce(repo, which),
+            None => bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
+        };
+    }
+    match experiment {
+        "oliveira-implicit" => return oliveira::implicit::reproduce(repo),
+        "nunes-optimisers" => {
+            print!("{}", nunes::optimisers::optimisers(repo, seeds.unwrap_or(10))?);
+            return Ok(());
+        }
+        "nunes-simbicon" => {
+            print!("{}", nunes::optimisers::simbicon(repo, seeds.unwrap_or(5))?);
+            return Ok(());
+        }
+        "nunes-robust" => {
+            print!("{}", nunes::optimisers::robust(repo)?);
+            return Ok(());
+        }
+        _ => {}
+    }
+    if let Some(which) = experiment.strip_prefix("oliveira") {
+        return oliveira::drapes::reproduce(repo, which);
+    }
+    if let Some(which) = experiment.strip_prefix("nunes") {
+        return nunes::report::reproduce(repo, which);
+    }
+    let friction = match friction {
+        Friction::Literal => FrictionMode::Literal,
+        Friction::Viscous => FrictionMode::Viscous,
+    };
+    let (doc, failed) = flex3d::report::reproduce(experiment, friction)?;
+    for (_, text) in flex3d::report::EXPERIMENTS.iter().filter_map(|e| doc.get(e).map(|t| (e, t))) {
+        print!("{text}\n\n");
+    }
+    // The committed report is the literal reading's; another reading is printed only.
+    if matches!(friction, FrictionMode::Literal) {
+        repo.write_report("reproduction/flex3d-results.md", &doc)?;
+    }
+    if !failed.is_empty() {
+        bail!("criteria did not hold for: {}", failed.join(", "));
+    }
+    Ok(())
 }
 
 fn main() -> Result<()> {
+    let repo = Repo::here();
     match Cli::parse().command {
-        Command::Reproduce { experiment, adaptive: true, .. } => match experiment.strip_prefix("oliveira") {
-            Some(which) => oliveira_adaptive::reproduce(which),
-            None => anyhow::bail!("--adaptive applies to oliveira, oliveira-1, oliveira-2 and oliveira-3"),
-        },
-        Command::Reproduce { experiment, friction, seeds, .. } => {
-            reproduce::run(&experiment, &friction, seeds)
+        Command::Reproduce { experiment, friction, adaptive, seeds } => {
+            reproduce(&repo, &experiment, friction, adaptive, seeds)
         }
-        Command::Figures { only } => figures::run(only.as_deref()),
-        Command::Bench { quick, only } => bench::run(quick, only.as_deref()),
+        Command::Figures { only } => figures::all(&repo, only.as_deref()),
+        Command::Bench { quick, only } => bench::run(&repo, quick, only.as_deref()),
     }
 }

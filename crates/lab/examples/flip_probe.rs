@@ -8,7 +8,9 @@ fn main() {
     let mut spacing = nunes::FLIP_SPACING;
     // `FLIP_RON=file` runs another controller (e.g. one `tune_flip` wrote).
     let text = std::env::var("FLIP_RON")
-        .map_or(nunes::BACKFLIP_RON.to_string(), |f| std::fs::read_to_string(f).expect("controller file"));
+        .map_or(nunes::controller_text("backflip").expect("backflip.ron"), |f| {
+            std::fs::read_to_string(f).expect("controller file")
+        });
     let mut c = nunes::parse(&text).expect("controller");
     // Overrides: `label=value` (a controller parameter, e.g. `B-PUSHER/E1/hip_l=0.5`) or `spacing=0.8`.
     for a in args.iter().skip(1) {

@@ -5,7 +5,7 @@ use anima_lab::nunes;
 
 fn main() {
     let args: Vec<f64> = std::env::args().skip(1).map(|a| a.parse().expect("number")).collect();
-    let mut c = nunes::parse(nunes::THROW_RON).expect("throw.ron");
+    let mut c = nunes::controller("throw").expect("throw.ron");
     if args.len() == 5 {
         let ids = c.free_params(&Selection::all());
         c.apply(&ids, &args);

@@ -185,7 +185,9 @@ fn main() {
     let seed: u64 = args.get(1).map_or(1, |a| a.parse().expect("seed"));
     // `FLIP_RON=file` starts from another controller (e.g. an earlier run's output).
     let text = std::env::var("FLIP_RON")
-        .map_or(nunes::BACKFLIP_RON.to_string(), |f| std::fs::read_to_string(f).expect("controller file"));
+        .map_or(nunes::controller_text("backflip").expect("backflip.ron"), |f| {
+            std::fs::read_to_string(f).expect("controller file")
+        });
     let mut base = nunes::parse(&text).expect("controller");
     for a in args.iter().skip(2) {
         let (name, v) = a.split_once('=').expect("label=value");

@@ -13,7 +13,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let budget: usize = args.get(1).map_or(200, |a| a.parse().unwrap_or(0));
     let iters: u64 = args.get(2).map_or(400, |a| a.parse().unwrap_or(0));
-    let base = nunes::parse(nunes::WALK_RON).expect("walk.ron");
+    let base = nunes::controller("walk").expect("walk.ron");
     if args[1] == "show" {
         let x: Vec<f64> = args[2..14].iter().map(|a| a.parse().expect("number")).collect();
         let p: Vec<f64> = args[14..18].iter().map(|a| a.parse().expect("number")).collect();

@@ -74,7 +74,7 @@ fn targets_become_body_signals_and_sensors_answer_from_the_catalogue() {
 fn a_short_walk_is_deterministic() {
     let run = || {
         let mut trace = Vec::new();
-        let c = nunes::parse(nunes::WALK_RON).unwrap();
+        let c = nunes::controller("walk").unwrap();
         let out =
             nunes::walk(c, 200, &WalkRules::default(), &[], |ch| trace.push(ch.env.sensors[0].com)).unwrap();
         (out, trace)
@@ -88,7 +88,7 @@ fn a_short_walk_is_deterministic() {
 
 #[test]
 fn the_optimised_walker_walks_without_falling() {
-    let c = nunes::parse(nunes::WALK_OPTIMISED_RON).unwrap();
+    let c = nunes::controller("walk-optimised").unwrap();
     let out = nunes::walk(c, 1000, &WalkRules::default(), &[], |_| ()).unwrap();
     assert!(!out.fell && !out.stopped, "{out:?}");
     assert_eq!(out.iterations, 1000);
@@ -99,7 +99,7 @@ fn the_optimised_walker_walks_without_falling() {
 fn the_thrower_releases_the_ball_when_t2_fires() {
     // T1: 80 iterations in E1 (0–79); T2: τ2 = 20 iterations in E2 (80–99), the release fires on its
     // switch at the end of iteration 99 (spec §6.7, §8.3.1).
-    let c = nunes::parse(nunes::THROW_RON).unwrap();
+    let c = nunes::controller("throw").unwrap();
     let mut ch = nunes::thrower_character(c).unwrap();
     for k in 0..120u64 {
         ch.step().unwrap();
@@ -111,18 +111,18 @@ fn the_thrower_releases_the_ball_when_t2_fires() {
 
 #[test]
 fn the_optimised_thrower_puts_the_ball_through_the_hoop() {
-    let c = nunes::parse(nunes::THROW_OPTIMISED_RON).unwrap();
+    let c = nunes::controller("throw-optimised").unwrap();
     let out = nunes::throw(c, &nunes::BASKET, 2000, |_| ()).unwrap();
     assert!(out.scored && !out.fell, "{out:?}");
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
     // Better than the unoptimised throw under the capped fitness it was optimised for.
-    let before = nunes::throw(nunes::parse(nunes::THROW_RON).unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
+    let before = nunes::throw(nunes::controller("throw").unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
     assert!(out.fitness_capped(cap) > before.fitness_capped(cap) + 2.0, "{out:?} {before:?}");
 }
 
 #[test]
 fn the_committed_backflip_turns_over_and_lands_standing() {
-    let c = nunes::parse(nunes::BACKFLIP_RON).unwrap();
+    let c = nunes::controller("backflip").unwrap();
     // 30 s: the landing comes at about iteration 245, so both humanoids stand for 17 s after it.
     let out = nunes::backflip(c, nunes::FLIP_SPACING, 600, |_| ()).unwrap();
     // A full backward turn of the trunk (at least 2π − 0.5 rad), both feet down after the flight, no
@@ -140,7 +140,7 @@ fn without_its_balance_feedback_the_acrobat_falls_after_the_landing() {
     // The same flip with the feedback gains of the landing state E8 set to 0 (fixed targets θ₀): the
     // acrobat lands, cannot stop its backward speed, and falls. So the standing landing above is the
     // feedback's work.
-    let mut c = nunes::parse(nunes::BACKFLIP_RON).unwrap();
+    let mut c = nunes::controller("backflip").unwrap();
     for act in ["waist", "ankle_l", "ankle_r"] {
         for k in ["k0", "k1"] {
             let id = c.param_id(&format!("B-ACRO-BODY/E8/acrobat/{act}/{k}")).unwrap();
@@ -156,7 +156,7 @@ fn without_its_balance_feedback_the_acrobat_falls_after_the_landing() {
 fn the_simbicon_form_puts_feedback_on_the_swing_hip_only() {
     // simbicon::controller turns W-LEGS's swing hips into world-frame feedback targets (and the
     // inter-thigh target with them) and the trunk into a world angle, and leaves everything else.
-    let walker = nunes::parse(nunes::WALK_RON).unwrap();
+    let walker = nunes::controller("walk").unwrap();
     let mut c = nunes::simbicon::controller(&walker).unwrap();
     for label in
         ["W-LEGS/E1/hip_l/k0", "W-LEGS/E3/hip_l/k1", "W-LEGS/E4/hip_r/k0", "W-LEGS/E6/inter_thigh/k1"]
@@ -185,7 +185,7 @@ fn the_simbicon_walker_walks_and_needs_its_feedback() {
     // The committed SIMBICON walker walks the thesis's 1000 iterations; with its two gains set to 0
     // (the same poses, fixed swing-hip targets in the world frame) it falls.
     let walk = |gains: Option<f64>| {
-        let mut c = nunes::parse(nunes::WALK_SIMBICON_RON).unwrap();
+        let mut c = nunes::controller("walk-simbicon").unwrap();
         if let Some(g) = gains {
             let ids: Vec<_> = c
                 .params()
@@ -213,7 +213,7 @@ fn a_hard_push_on_the_head_knocks_the_walker_down() {
     // The push the optimiser comparison measures robustness with (a force on the head for two control
     // steps): nothing happens without it, and an impulse far beyond any reported survival fells the
     // walker, so the reported survivals are pushes that act.
-    let c = nunes::parse(nunes::WALK_OPTIMISED_RON).unwrap();
+    let c = nunes::controller("walk-optimised").unwrap();
     let rules = WalkRules { window: 0, ..WalkRules::default() };
     let run = |impulse: f64| {
         let push = nunes::Push::impulse(impulse, 400, 2);
@@ -228,7 +228,10 @@ fn a_hard_push_on_the_head_knocks_the_walker_down() {
 fn the_symmetric_walker_copies_its_thresholds_on_e1() {
     // Variant A (spec §8.1.7): E1's procedure copies p2 → p5 and p3 → p6, so only p2 and p3 are
     // free. Without the procedure (walk.ron) p5 and p6 keep their own values.
-    for (text, copies) in [(nunes::WALK_SYMMETRIC_RON, true), (nunes::WALK_RON, false)] {
+    for (text, copies) in [
+        (nunes::controller_text("walk-symmetric").unwrap().as_str(), true),
+        (nunes::controller_text("walk").unwrap().as_str(), false),
+    ] {
         let mut c = nunes::parse(text).unwrap();
         let id = |c: &anima_control::Controller, l: &str| c.param_id(l).unwrap();
         let (p2, p3, p5, p6) =
@@ -256,7 +259,7 @@ fn the_temporal_walker_changes_state_on_time_alone() {
     // Variant B (spec §8.1.8): T2, T3, T5, T6 are temporal, so every visit to E2 lasts as long as
     // T2 says, whatever the body does; changing T2 changes every such visit by the same amount.
     let visits = |t2: f64| {
-        let mut c = nunes::parse(nunes::WALK_TEMPORAL_RON).unwrap();
+        let mut c = nunes::controller("walk-temporal").unwrap();
         c.set_param(c.param_id("W-LEGS/T2/time").unwrap(), t2);
         let legs = c.machine_index("W-LEGS").unwrap();
         let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
@@ -289,7 +292,7 @@ fn the_temporal_walker_changes_state_on_time_alone() {
 fn the_robust_walker_survives_20_n_s_pushes_both_ways() {
     // The goal beyond the thesis: the CMA-ES walker (nunes-robust) stays up 10 s after a 20 N·s push
     // on the head, forward and backward, 20 s into its walk.
-    let c = nunes::parse(nunes::WALK_ROBUST_RON).unwrap();
+    let c = nunes::controller("walk-robust").unwrap();
     let rules = WalkRules { window: 0, ..WalkRules::default() };
     for impulse in [20.0, -20.0] {
         let push = nunes::Push::impulse(impulse, 400, 2);

@@ -1,27 +1,32 @@
 //! The experiments of Nunes 2006 Chapter 6 on anima's bodies and controllers: worlds, evaluators and
-//! fitness functions (spec §7.4, §7.6). The optimisation runs themselves live in `cargo xtask
-//! reproduce nunes-*`; this module is what they, the tests and the figures share.
+//! fitness functions (spec §7.4, §7.6) in this module; the thesis's optimisation runs beside its numbers
+//! ([`report`], `cargo xtask reproduce nunes`), the optimiser comparisons and the robust and SIMBICON
+//! searches beyond the thesis ([`optimisers`]), and the strobe figures ([`figures`]).
+
+pub mod figures;
+pub mod optimisers;
+pub mod report;
 
 use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, SolverSettings, World, WorldSettings};
 use anima_control::Controller;
+use anyhow::Context as _;
 
 use anima_character::{Character, CharacterError, procedures};
 
-/// The shipped controllers, embedded so tests and tools need no paths.
-pub const WALK_RON: &str = include_str!("../../../assets/controllers/walk.ron");
-pub const WALK_OPTIMISED_RON: &str = include_str!("../../../assets/controllers/walk-optimised.ron");
-/// The walker CMA-ES optimised for pushes (`cargo xtask reproduce nunes-robust`).
-pub const WALK_ROBUST_RON: &str = include_str!("../../../assets/controllers/walk-robust.ron");
-/// The thesis's variant A: symmetric thresholds by a procedure on E1 (spec §8.1.7).
-pub const WALK_SYMMETRIC_RON: &str = include_str!("../../../assets/controllers/walk-symmetric.ron");
-/// The thesis's variant B: temporal instead of sensory transitions (spec §8.1.8).
-pub const WALK_TEMPORAL_RON: &str = include_str!("../../../assets/controllers/walk-temporal.ron");
-/// The SIMBICON form of the walker ([`simbicon`]) optimised like `walk-robust.ron` (written by
-/// `cargo xtask reproduce nunes-simbicon`).
-pub const WALK_SIMBICON_RON: &str = include_str!("../../../assets/controllers/walk-simbicon.ron");
-pub const THROW_RON: &str = include_str!("../../../assets/controllers/throw.ron");
-pub const THROW_OPTIMISED_RON: &str = include_str!("../../../assets/controllers/throw-optimised.ron");
-pub const BACKFLIP_RON: &str = include_str!("../../../assets/controllers/backflip.ron");
+/// The text of a controller shipped in `assets/controllers/` (`"walk"` for `walk.ron`): the thesis's
+/// walker (`walk`), its optimised (`walk-optimised`), push-robust (`walk-robust`), SIMBICON
+/// (`walk-simbicon`), symmetric (`walk-symmetric`, variant A) and temporal (`walk-temporal`, variant B)
+/// forms, the thrower (`throw`, `throw-optimised`) and the backflip pair (`backflip`).
+pub fn controller_text(name: &str) -> anyhow::Result<String> {
+    let path = crate::repo::Repo::here().assets(format!("controllers/{name}.ron"));
+    std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))
+}
+
+/// A shipped controller (see [`controller_text`]), parsed with the character procedures.
+pub fn controller(name: &str) -> anyhow::Result<Controller> {
+    let text = controller_text(name)?;
+    parse(&text).with_context(|| format!("assets/controllers/{name}.ron"))
+}
 
 /// The control step of the thesis, seconds (spec §3.1: 20 iterations = 1 s).
 pub const DT: f64 = 0.05;

@@ -6,18 +6,19 @@
 //! A strobe picture overlays the figure every few control iterations, older frames faded towards the
 //! sky, in the thesis's side view (x forward, y up).
 
+use crate::nunes::{self, WalkRules};
+use crate::repo::Repo;
+use crate::run::body::{SKY, draw_bodies, draw_ground};
 use anima_body::BodyPose;
 use anima_character::Character;
 use anima_control::Controller;
 use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Optimiser, RandomSearch, RunLog, run,
 };
-use anima_lab::nunes::{self, WalkRules};
-use anima_lab::run::body::{SKY, draw_bodies, draw_ground};
 use anima_viz::{Image, LinePlot, Series, View2d, draw_line, fill_disc};
 use anyhow::{Context, Result};
 
-use crate::nunes::{SEED, throw_fitness, throw_stage, walk_fitness, walk_stages};
+use crate::nunes::report::{SEED, throw_fitness, throw_stage, walk_fitness, walk_stages};
 
 /// Every body of every model after one control iteration.
 type Frame = Vec<Vec<BodyPose>>;
@@ -82,9 +83,9 @@ fn fig_6_7() -> Result<Image> {
     let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
     let mut runs = Vec::new();
     let walkers = [
-        ("the spec's §8.1.2 poses (before re-authoring)", crate::nunes_optimisers::spec_walker()?),
-        ("walk.ron (re-authored; before the thesis's optimisation)", nunes::parse(nunes::WALK_RON)?),
-        ("walk-optimised.ron (after)", nunes::parse(nunes::WALK_OPTIMISED_RON)?),
+        ("the spec's §8.1.2 poses (before re-authoring)", crate::nunes::optimisers::spec_walker()?),
+        ("walk.ron (re-authored; before the thesis's optimisation)", nunes::controller("walk")?),
+        ("walk-optimised.ron (after)", nunes::controller("walk-optimised")?),
     ];
     for (name, c) in walkers {
         let mut frames = Vec::new();
@@ -118,7 +119,7 @@ fn fig_6_7() -> Result<Image> {
 /// Fig. 6.12: the optimised throw, the ball's path and the hoop.
 fn fig_6_12() -> Result<Image> {
     let mut frames = Vec::new();
-    let out = nunes::throw(nunes::parse(nunes::THROW_OPTIMISED_RON)?, &nunes::BASKET, 2000, |c| {
+    let out = nunes::throw(nunes::controller("throw-optimised")?, &nunes::BASKET, 2000, |c| {
         frames.push(capture(c))
     })?;
     let ball =
@@ -176,7 +177,7 @@ fn fig_6_12() -> Result<Image> {
 /// Fig. 6.17: the assisted backflip, from the push to the landing (or the end of the run).
 fn fig_6_17() -> Result<Image> {
     let mut frames = Vec::new();
-    let out = nunes::backflip(nunes::parse(nunes::BACKFLIP_RON)?, nunes::FLIP_SPACING, 380, |c| {
+    let out = nunes::backflip(nunes::controller("backflip")?, nunes::FLIP_SPACING, 380, |c| {
         frames.push(capture(c))
     })?;
     let start = out.push_at.map_or(0, |p| (p as usize).saturating_sub(6));
@@ -216,8 +217,8 @@ fn fig_pushes() -> Result<Image> {
     let (first, last, every) = (AT - 10, AT + 100, 5);
     let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
     let walkers = [
-        ("walk-robust.ron (the thesis's machines)", nunes::WALK_ROBUST_RON),
-        ("walk-simbicon.ron (SIMBICON form)", nunes::WALK_SIMBICON_RON),
+        ("walk-robust.ron (the thesis's machines)", "walk-robust"),
+        ("walk-simbicon.ron (SIMBICON form)", "walk-simbicon"),
     ];
     let (width, height) = (1600, 260);
     let mut panels = Vec::new();
@@ -227,7 +228,7 @@ fn fig_pushes() -> Result<Image> {
             let mut frames = Vec::new();
             let mut k = 0;
             // 10 s after the push, as the push survival of `nunes-optimisers` counts it.
-            let out = nunes::walk(nunes::parse(text)?, AT + 200, &rules, &[push], |c| {
+            let out = nunes::walk(nunes::controller(text)?, AT + 200, &rules, &[push], |c| {
                 k += 1;
                 if (first..=last).contains(&k) && (k - first) % every == 0 {
                     frames.push(capture(c));
@@ -309,18 +310,18 @@ fn compare(
     ];
     let mut logs = Vec::new();
     for (name, opt) in &mut opts {
-        eprintln!("xtask:   {name}, {budget} evaluations …");
+        eprintln!("anima-lab:   {name}, {budget} evaluations …");
         let mut log = RunLog::default();
         run(opt.as_mut(), objective, budget, &mut log);
         let best = log.best().map_or(f64::NAN, |e| e.fitness);
-        eprintln!("xtask:   {name}: best {best:.3} after {} evaluations", log.len());
+        eprintln!("anima-lab:   {name}: best {best:.3} after {} evaluations", log.len());
         logs.push((*name, log));
     }
     Ok(logs)
 }
 
 fn walk_fitness_figure() -> Result<Image> {
-    let base = nunes::parse(nunes::WALK_RON)?;
+    let base = nunes::controller("walk")?;
     let ids = base.free_params(&anima_control::Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
     let x0 = base.values_of(&ids);
     let objective = |x: &[f64]| walk_fitness(&base, x);
@@ -329,7 +330,7 @@ fn walk_fitness_figure() -> Result<Image> {
 }
 
 fn throw_fitness_figure() -> Result<Image> {
-    let base: Controller = nunes::parse(nunes::THROW_RON)?;
+    let base: Controller = nunes::controller("throw")?;
     let ids = base.free_params(&anima_control::Selection::all());
     let x0 = base.values_of(&ids);
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
@@ -341,18 +342,19 @@ fn throw_fitness_figure() -> Result<Image> {
 }
 
 /// Writes every Nunes figure through `save`.
-pub fn figures(save: &dyn Fn(&str, &Image) -> Result<()>) -> Result<()> {
-    eprintln!("xtask: Fig. 6.7 (walker strobe) …");
+pub fn figures(repo: &Repo) -> Result<()> {
+    let save = |name: &str, img: &Image| repo.write_figure(name, img);
+    eprintln!("anima-lab: Fig. 6.7 (walker strobe) …");
     save("nunes-fig-6-7-walk.png", &fig_6_7().context("Fig. 6.7")?)?;
-    eprintln!("xtask: Fig. 6.12 (throw strobe) …");
+    eprintln!("anima-lab: Fig. 6.12 (throw strobe) …");
     save("nunes-fig-6-12-throw.png", &fig_6_12().context("Fig. 6.12")?)?;
-    eprintln!("xtask: Fig. 6.17 (backflip strobe) …");
+    eprintln!("anima-lab: Fig. 6.17 (backflip strobe) …");
     save("nunes-fig-6-17-backflip.png", &fig_6_17().context("Fig. 6.17")?)?;
-    eprintln!("xtask: pushes on the robust and SIMBICON walkers …");
+    eprintln!("anima-lab: pushes on the robust and SIMBICON walkers …");
     save("nunes-pushes.png", &fig_pushes().context("push figure")?)?;
-    eprintln!("xtask: walking fitness against evaluations …");
+    eprintln!("anima-lab: walking fitness against evaluations …");
     save("nunes-walk-fitness.png", &walk_fitness_figure()?)?;
-    eprintln!("xtask: throwing fitness against evaluations …");
+    eprintln!("anima-lab: throwing fitness against evaluations …");
     save("nunes-throw-fitness.png", &throw_fitness_figure()?)?;
     Ok(())
 }

@@ -16,12 +16,14 @@
 
 use std::fmt::Write as _;
 
+use crate::nunes::report::SEED;
+use crate::nunes::{self, Push, WalkRules, walk_poses};
+use crate::repo::Repo;
 use anima_control::Controller;
 use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Interval, Optimiser, RandomSearch, RunLog,
     Stage, run,
 };
-use anima_lab::nunes::{self, Push, WalkRules, walk_poses};
 use anyhow::Result;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -64,7 +66,7 @@ fn with_poses(base: &Controller, x: &[f64]) -> Controller {
 
 /// The thesis's walker with the spec's proposed leg poses (it falls within seconds).
 pub fn spec_walker() -> Result<Controller> {
-    Ok(with_poses(&nunes::parse(nunes::WALK_RON)?, &walk_poses::SPEC))
+    Ok(with_poses(&nunes::controller("walk")?, &walk_poses::SPEC))
 }
 
 /// A push of `impulse` N·s (positive forward) on the head.
@@ -148,16 +150,16 @@ fn csv(log: &RunLog) -> String {
     s
 }
 
-fn one_run(kind: usize, seed: u64) -> Result<Measured> {
-    let base = nunes::parse(nunes::WALK_RON)?;
+fn one_run(repo: &Repo, kind: usize, seed: u64) -> Result<Measured> {
+    let base = nunes::controller("walk")?;
     let (name, mut opt) = optimiser(kind, seed)?;
     let objective = |x: &[f64]| score(with_poses(&base, x), &[]);
     let mut log = RunLog::default();
     run(opt.as_mut(), &objective, BUDGET, &mut log);
-    let dir = crate::root().join("target/nunes/optimisers");
+    let dir = repo.cache("nunes/optimisers");
     std::fs::create_dir_all(&dir)?;
     let slug: String = name.chars().filter(char::is_ascii_alphanumeric).collect();
-    anima_lab::output::write_atomic(&dir.join(format!("{slug}-seed{seed}.csv")), |w| {
+    crate::output::write_atomic(&dir.join(format!("{slug}-seed{seed}.csv")), |w| {
         Ok(w.write_all(csv(&log).as_bytes())?)
     })?;
     let best = log.best().map(|e| (e.x.clone(), e.fitness)).unwrap_or((walk_poses::SPEC.to_vec(), f64::NAN));
@@ -173,7 +175,7 @@ fn one_run(kind: usize, seed: u64) -> Result<Measured> {
         push: (largest_push(&winner, 1.0), largest_push(&winner, -1.0)),
     };
     eprintln!(
-        "xtask:   {name}, seed {seed}: 10 m after {}, best {:.1}, 10 min {:.0} m{}, pushes +{} / −{} N·s",
+        "anima-lab:   {name}, seed {seed}: 10 m after {}, best {:.1}, 10 min {:.0} m{}, pushes +{} / −{} N·s",
         m.to_ten_metres.map_or("never".to_string(), |k| format!("{k} evaluations")),
         m.best,
         m.ten_minutes.0,
@@ -194,17 +196,17 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// `reproduce nunes-optimisers`.
-pub fn optimisers(seeds: usize) -> Result<String> {
+pub fn optimisers(repo: &Repo, seeds: usize) -> Result<String> {
     let spec = spec_walker()?;
     let before = nunes::walk(spec.clone(), WALK_ITERATIONS, &WalkRules::default(), &[], |_| ())?;
     eprintln!(
-        "xtask: the spec's walker: {:.2} m in {} iterations{}",
+        "anima-lab: the spec's walker: {:.2} m in {} iterations{}",
         before.distance,
         before.iterations,
         if before.fell { ", falls" } else { "" }
     );
     let jobs: Vec<(usize, u64)> = (0..4).flat_map(|k| (0..seeds as u64).map(move |s| (k, s))).collect();
-    let results: Vec<Measured> = jobs.par_iter().map(|&(k, s)| one_run(k, s)).collect::<Result<_>>()?;
+    let results: Vec<Measured> = jobs.par_iter().map(|&(k, s)| one_run(repo, k, s)).collect::<Result<_>>()?;
     let mut s = String::new();
     writeln!(s, "# Optimisers compared on the walker\n")?;
     writeln!(
@@ -278,9 +280,7 @@ pub fn optimisers(seeds: usize) -> Result<String> {
         s,
         "\nThe best-so-far score of every run is in `target/nunes/optimisers/<optimiser>-seed<k>.csv`.\n"
     )?;
-    let path = crate::root().join("docs/reproduction/nunes-optimisers.md");
-    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(s.as_bytes())?))?;
-    eprintln!("xtask: wrote {}", path.display());
+    repo.write_text("docs/reproduction/nunes-optimisers.md", &s)?;
     Ok(s)
 }
 
@@ -292,7 +292,7 @@ const ROBUST_IMPULSE: f64 = 20.0;
 const ROBUST_BUDGET: usize = 150;
 
 fn robust_pushes() -> Vec<Push> {
-    let mut rng = ChaCha8Rng::seed_from_u64(crate::nunes::SEED);
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
     (0..ROBUST_PUSHES)
         .map(|k| {
             let at = rng.random_range(200..800);
@@ -337,7 +337,7 @@ fn robust_search(
             break;
         }
         eprintln!(
-            "xtask:   CMA-ES {name}: {} evaluations, best {:.2}",
+            "anima-lab:   CMA-ES {name}: {} evaluations, best {:.2}",
             log.len(),
             log.best().map_or(f64::NAN, |e| e.fitness)
         );
@@ -387,26 +387,25 @@ fn pushes_list(pushes: &[Push]) -> String {
 const WALKER_TABLE_HEAD: &str = "| walker | robust score | 10-minute distance (m) | mean speed (m/s) | largest push forward / backward (N·s) |\n|---|---|---|---|---|";
 
 /// `reproduce nunes-robust`: CMA-ES on the mean score over six pushes (common random numbers).
-pub fn robust() -> Result<String> {
-    let base = nunes::parse(nunes::WALK_RON)?;
+pub fn robust(repo: &Repo) -> Result<String> {
+    let base = nunes::controller("walk")?;
     let pushes = robust_pushes();
     let objective = |x: &[f64]| robust_score(&with_poses(&base, x), &pushes);
     let x0 = walker_poses(&base);
     let start = with_poses(&base, &x0);
     let f0 = objective(&x0);
-    eprintln!("xtask: robust objective of the re-authored walker: {f0:.2}");
-    let (best, fbest, evaluations) =
-        robust_search("robust", walk_poses::space(), x0, &objective, crate::nunes::SEED)?;
+    eprintln!("anima-lab: robust objective of the re-authored walker: {f0:.2}");
+    let (best, fbest, evaluations) = robust_search("robust", walk_poses::space(), x0, &objective, SEED)?;
     let winner = with_poses(&base, &best);
-    let path = crate::root().join("assets/controllers/walk-robust.ron");
+    let path = "assets/controllers/walk-robust.ron";
     let text = format!(
         "// Written by `cargo xtask reproduce nunes-robust`: walk.ron with its twelve symmetric leg-pose numbers\n\
          // (anima_lab::nunes::walk_poses) found by CMA-ES on the mean walking score over six ±{ROBUST_IMPULSE} N·s head\n\
          // pushes at random times (common random numbers, seed {}).\n{}",
-        crate::nunes::SEED,
+        SEED,
         winner.to_ron()
     );
-    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    repo.write_text(path, &text)?;
     let mut s = String::new();
     writeln!(s, "## A walker optimised for pushes (CMA-ES, robust objective)\n")?;
     writeln!(
@@ -430,8 +429,8 @@ pub fn robust() -> Result<String> {
 /// c_d and c_v as two more numbers. Both forms are searched with `seeds` CMA-ES seeds from 2006 on;
 /// seed 2006's SIMBICON winner is written to `assets/controllers/walk-simbicon.ron` (its thesis-form
 /// winner is `walk-robust.ron`).
-pub fn simbicon(seeds: usize) -> Result<String> {
-    let walker = nunes::parse(nunes::WALK_RON)?;
+pub fn simbicon(repo: &Repo, seeds: usize) -> Result<String> {
+    let walker = nunes::controller("walk")?;
     let base = nunes::simbicon::controller(&walker)?;
     let pushes = robust_pushes();
     let with = |x: &[f64]| {
@@ -445,7 +444,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
     let mut x0 = x0_thesis.clone();
     x0.extend([0.0, 0.0]);
     let f0 = objective(&x0);
-    eprintln!("xtask: robust objective of the SIMBICON form with gains 0: {f0:.2}");
+    eprintln!("anima-lab: robust objective of the SIMBICON form with gains 0: {f0:.2}");
     struct Row {
         seed: u64,
         thesis: (f64, Robustness),
@@ -454,7 +453,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
     let mut rows = Vec::new();
     let mut winner = None;
     let mut evaluations = 0;
-    for seed in crate::nunes::SEED..crate::nunes::SEED + seeds as u64 {
+    for seed in SEED..SEED + seeds as u64 {
         let (xt, ft, _) = robust_search(
             &format!("thesis form, seed {seed}"),
             walk_poses::space(),
@@ -472,7 +471,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
         evaluations = n;
         let (rt, rs) = rayon::join(|| robustness(&with_poses(&walker, &xt)), || robustness(&with(&xs)));
         eprintln!(
-            "xtask: seed {seed}: thesis form {ft:.2} ({:.0} m, {} / {} N·s), SIMBICON {fs:.2} ({:.0} m, {} / {} N·s)",
+            "anima-lab: seed {seed}: thesis form {ft:.2} ({:.0} m, {} / {} N·s), SIMBICON {fs:.2} ({:.0} m, {} / {} N·s)",
             rt.distance, rt.forward, rt.backward, rs.distance, rs.forward, rs.backward
         );
         if winner.is_none() {
@@ -482,7 +481,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
     }
     let best = winner.unwrap_or_else(|| x0.clone());
     let winner = with(&best);
-    let path = crate::root().join("assets/controllers/walk-simbicon.ron");
+    let path = "assets/controllers/walk-simbicon.ron";
     let text = format!(
         "// Written by `cargo xtask reproduce nunes-simbicon`: walk.ron's machines with SIMBICON-style balance\n\
          // feedback (anima_lab::nunes::simbicon): the swing hip's world angle θ₀ + c_d·d + c_v·v and the trunk at a\n\
@@ -490,10 +489,10 @@ pub fn simbicon(seeds: usize) -> Result<String> {
          // score over six ±{ROBUST_IMPULSE} N·s head pushes (common random numbers, seed {}).\n{}",
         best[12],
         best[13],
-        crate::nunes::SEED,
+        SEED,
         winner.to_ron()
     );
-    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    repo.write_text(path, &text)?;
     let mut s = String::new();
     writeln!(s, "## SIMBICON-style feedback against the thesis's machines\n")?;
     writeln!(
@@ -512,7 +511,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
         nunes::simbicon::GAINS_LO[1],
         nunes::simbicon::GAINS_HI[1],
         pushes_list(&pushes),
-        crate::nunes::SEED,
+        SEED,
     )?;
     writeln!(
         s,
@@ -565,7 +564,7 @@ pub fn simbicon(seeds: usize) -> Result<String> {
         wins(&|r| !r.simbicon.1.fell),
         wins(&|r| !r.thesis.1.fell),
     )?;
-    writeln!(s, "Seed {}'s SIMBICON winner, and what its gains do:\n", crate::nunes::SEED)?;
+    writeln!(s, "Seed {}'s SIMBICON winner, and what its gains do:\n", SEED)?;
     writeln!(s, "{WALKER_TABLE_HEAD}")?;
     measure_row(&mut s, "SIMBICON form, gains 0 (the start)", &with(&x0), f0)?;
     measure_row(

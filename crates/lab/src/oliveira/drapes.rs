@@ -5,65 +5,17 @@
 
 use std::fmt::Write as _;
 use std::io::{BufWriter, Write as _};
-use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::ops::ControlFlow;
+use std::path::Path;
 
-use anima_cloth::oliveira::OliveiraCloth;
-use anima_geom::query::tessellate;
-use anima_geom::{Aabb, DVec3, Solid, TriangleMesh};
+use anima_cloth::oliveira::AdaptiveCloth;
+use anima_geom::{Aabb, DVec3};
 use anima_viz::{Camera, Image, LinePlot, RenderMesh, RenderSettings, Series, render};
 use anyhow::{Context, Result, bail};
 
-/// One thesis test: its scene files and what the thesis printed about it.
-struct Test {
-    number: usize,
-    title: &'static str,
-    slug: &'static str,
-    /// Snapshot times of Figs. 5.2, 5.7, 5.12, s.
-    snapshots: [f64; 4],
-    figure: &'static str,
-    /// The thesis's timing table: (mesh, total s, frames, s per frame).
-    table: &'static str,
-    thesis: &'static [(&'static str, f64, u64, f64)],
-}
-
-const TESTS: [Test; 3] = [
-    Test {
-        number: 1,
-        title: "Test I — cloth on the Stanford Bunny",
-        slug: "bunny",
-        snapshots: [0.1, 0.25, 0.35, 0.5],
-        figure: "Fig. 5.2",
-        table: "Table 5.2",
-        thesis: &[
-            ("coarse 5 × 5", 24.8, 2236, 0.01109),
-            ("adaptive", 10401.7, 134127, 0.07755),
-            ("fine 17 × 17", 19237.7, 174312, 0.11036),
-        ],
-    },
-    Test {
-        number: 2,
-        title: "Test II — tablecloth on a round table",
-        slug: "table",
-        snapshots: [0.15, 0.5, 0.75, 1.0],
-        figure: "Fig. 5.7",
-        table: "Table 5.4",
-        thesis: &[
-            ("coarse 5 × 5", 14.3, 4391, 0.00326),
-            ("adaptive", 35986.4, 1020828, 0.03525),
-            ("fine 17 × 17", 13870.7, 346795, 0.03999),
-        ],
-    },
-    Test {
-        number: 3,
-        title: "Test III — cloth on a sphere",
-        slug: "sphere",
-        snapshots: [0.15, 0.3, 0.45, 0.6],
-        figure: "Fig. 5.12",
-        table: "Table 5.6",
-        thesis: &[("1-to-4 subdivision", 20086.4, 122509, 0.16395), ("remeshing", 21204.5, 269071, 0.07880)],
-    },
-];
+use super::{DrapeTest as Test, Ended, TESTS, object_meshes, run_drape, unremeshed};
+use crate::repo::Repo;
+use crate::report::Document;
 
 const RESOLUTIONS: [(usize, &str); 2] = [(5, "coarse"), (17, "fine")];
 
@@ -96,18 +48,15 @@ struct Run {
     snapshots: Vec<(f64, Vec<DVec3>, usize)>,
     penetrations_end: usize,
     max_speed_end: f64,
-    cloth: OliveiraCloth,
-}
-
-fn scene_path(test: &Test, n: usize) -> PathBuf {
-    crate::root().join(format!("assets/oliveira/test-{}-{}-{n}x{n}.ron", test.number, test.slug))
+    cloth: AdaptiveCloth,
 }
 
 /// Runs one scene to its end, writing the per-step log to `log` when given.
-fn run_scene(test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> Result<Run> {
-    let path = scene_path(test, n);
+fn run_scene(repo: &Repo, test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> Result<Run> {
+    let path = test.scene_path(repo, n);
     let loaded = anima_scene::oliveira::load(&path)?;
-    let mut cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
+    let cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
+    let mut cloth = unremeshed(cloth, loaded.scene.gravity_m_s2);
     let duration = loaded.scene.duration_s;
     let mut out = match log {
         Some(p) => {
@@ -125,25 +74,25 @@ fn run_scene(test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> 
         }
         None => None,
     };
-    let (nv, ne, nf) = (cloth.mesh().n_vertices(), cloth.mesh().n_edges(), cloth.mesh().n_faces());
-    let (m_min, k_max) = (cloth.min_mass(), cloth.max_stiffness());
-    let mut samples = vec![Sample { t: 0.0, dt: cloth.next_dt(), p: cloth.tracked_position() }];
+    let c = cloth.cloth();
+    let (nv, ne, nf) = (c.mesh().n_vertices(), c.mesh().n_edges(), c.mesh().n_faces());
+    let (m_min, k_max) = (c.min_mass(), c.max_stiffness());
+    let mut samples = vec![Sample { t: 0.0, dt: c.next_dt(), p: c.tracked_position() }];
     let mut snapshots = Vec::new();
     let mut next_snapshot = 0;
     let mut step_wall = 0.0;
     // About 4000 plotted points per run, whatever its step count.
     let mut last_sample_t = 0.0;
     let sample_every = duration / 4000.0;
+    let mut log_error = None;
     let cpu_start = thread_cpu_time();
-    while cloth.time() < duration {
-        let start = Instant::now();
-        let report = cloth.step().with_context(|| format!("{} {label}", test.title))?;
-        let wall = start.elapsed().as_secs_f64();
+    let ended = run_drape(&mut cloth, duration, |a, report, wall| {
+        let cloth = a.cloth();
         step_wall += wall;
         let t = cloth.time();
         let p = cloth.tracked_position();
-        if let Some(w) = out.as_mut() {
-            writeln!(
+        if let Some(w) = out.as_mut()
+            && let Err(e) = writeln!(
                 w,
                 "{},{t:.9e},{:.6e},{wall:.3e},{nv},{ne},{nf},{m_min:.6e},{k_max:.6e},{:.9},{:.9},{:.9},{}",
                 cloth.steps(),
@@ -152,7 +101,10 @@ fn run_scene(test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> 
                 p.y,
                 p.z,
                 report.hits
-            )?;
+            )
+        {
+            log_error = Some(e);
+            return ControlFlow::Break(());
         }
         if t - last_sample_t >= sample_every {
             samples.push(Sample { t, dt: report.dt, p });
@@ -162,27 +114,35 @@ fn run_scene(test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> 
             snapshots.push((t, cloth.positions().to_vec(), cloth.penetrations().len()));
             next_snapshot += 1;
         }
-    }
+        ControlFlow::Continue(())
+    });
     let cpu_s = thread_cpu_time().zip(cpu_start).map(|(end, start)| end - start);
+    if let Some(e) = log_error {
+        return Err(e).context("writing the per-step log");
+    }
+    if let Ended::Failed(e) = ended {
+        return Err(e).with_context(|| format!("{} {label}", test.title));
+    }
     if let Some(mut w) = out {
         w.flush()?;
     }
+    let c = cloth.cloth();
     Ok(Run {
         label,
         n,
-        steps: cloth.steps(),
+        steps: c.steps(),
         step_wall_s: step_wall,
         cpu_s,
-        first_collision: cloth.first_collision_time(),
-        hits: cloth.total_hits(),
+        first_collision: c.first_collision_time(),
+        hits: c.total_hits(),
         m_min,
         k_max,
-        dt_final: cloth.next_dt(),
-        end_time: cloth.time(),
+        dt_final: c.next_dt(),
+        end_time: c.time(),
         samples,
         snapshots,
-        penetrations_end: cloth.penetrations().len(),
-        max_speed_end: cloth.max_speed(),
+        penetrations_end: c.penetrations().len(),
+        max_speed_end: c.max_speed(),
         cloth,
     })
 }
@@ -194,49 +154,44 @@ fn thread_cpu_time() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
-fn runs_of(test: &Test, write_logs: bool) -> Result<Vec<Run>> {
+fn runs_of(repo: &Repo, test: &Test, write_logs: bool) -> Result<Vec<Run>> {
     RESOLUTIONS
         .iter()
         .map(|&(n, label)| {
-            eprintln!("xtask: {} on the {label} {n} × {n} mesh …", test.title);
-            let log = write_logs.then(|| {
-                crate::root().join(format!("out/oliveira/test-{}-{}-{n}x{n}.csv", test.number, test.slug))
-            });
-            run_scene(test, n, label, log.as_deref())
+            eprintln!("anima-lab: {} on the {label} {n} × {n} mesh …", test.title);
+            let log = write_logs
+                .then(|| repo.out(format!("oliveira/test-{}-{}-{n}x{n}.csv", test.number, test.slug)));
+            run_scene(repo, test, n, label, log.as_deref())
         })
         .collect()
 }
 
-/// `cargo xtask reproduce oliveira[-1|-2|-3]`; `which` is what follows "oliveira".
-pub fn reproduce(which: &str) -> Result<()> {
-    let chosen: Vec<&Test> = match which {
-        "" | "-all" => TESTS.iter().collect(),
-        "-1" => vec![&TESTS[0]],
-        "-2" => vec![&TESTS[1]],
-        "-3" => vec![&TESTS[2]],
-        other => bail!(
-            "unknown experiment `oliveira{other}`; expected oliveira-1, oliveira-2, oliveira-3 or oliveira"
-        ),
+/// The sections of `docs/reproduction/oliveira-results.md`, one per test.
+const SECTIONS: [&str; 3] = ["test-1", "test-2", "test-3"];
+
+const HEADER: &str = "# Oliveira 2013 reproduction: measured results (static meshes)\n\n_Generated by \
+                      `cargo xtask reproduce oliveira` (`oliveira-N` rewrites test N's section only); do not edit. \
+                      The claims, choices and figures are in [oliveira.md](oliveira.md). Per-step logs: \
+                      `out/oliveira/*.csv`._";
+
+/// `cargo xtask reproduce oliveira[-1|-2|-3]`; `which` is what follows "oliveira". Writes the chosen
+/// tests' sections of `docs/reproduction/oliveira-results.md` and fails when a criterion does not hold.
+pub fn reproduce(repo: &Repo, which: &str) -> Result<()> {
+    let Some(chosen) = Test::select(which) else {
+        bail!("unknown experiment `oliveira{which}`; expected oliveira-1, oliveira-2, oliveira-3 or oliveira")
     };
-    let mut doc = String::new();
+    let mut doc = Document::new(HEADER, &SECTIONS);
     let mut failed = Vec::new();
     for test in chosen {
-        let runs = runs_of(test, true)?;
+        let runs = runs_of(repo, test, true)?;
         let (text, ok) = report(test, &runs);
         print!("{text}");
-        doc.push_str(&text);
+        doc.section(SECTIONS[test.number - 1], text);
         if !ok {
             failed.push(test.number);
         }
     }
-    if which.is_empty() || which == "-all" {
-        let path = crate::root().join("docs/reproduction/oliveira-results.md");
-        let header = "# Oliveira 2013 reproduction: measured results (static meshes)\n\n_Generated by \
-                      `cargo xtask reproduce oliveira`; do not edit. The claims, choices and figures are in \
-                      [oliveira.md](oliveira.md). Per-step logs: `out/oliveira/*.csv`._\n\n";
-        anima_lab::output::write_atomic(&path, |w| Ok(w.write_all((header.to_owned() + &doc).as_bytes())?))?;
-        eprintln!("xtask: wrote {}", path.display());
-    }
+    repo.write_report("reproduction/oliveira-results.md", &doc)?;
     if !failed.is_empty() {
         bail!("criteria did not hold for Oliveira test(s) {failed:?}");
     }
@@ -277,7 +232,7 @@ fn report(test: &Test, runs: &[Run]) -> (String, bool) {
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for r in runs {
-        let p = r.cloth.tracked_position();
+        let p = r.cloth.cloth().tracked_position();
         let _ = writeln!(
             s,
             "| {} | {:.3e} | {:.1} | {:.3e} | {} | {} | {:.4} | {:.3} | ({:.3}, {:.3}, {:.3}) |",
@@ -334,12 +289,15 @@ fn report(test: &Test, runs: &[Run]) -> (String, bool) {
 }
 
 /// The Oliveira figures, handed to `save` by file name: P's trajectory, Δt and rendered frames of each test.
-pub fn figures(save: &dyn Fn(&str, &Image) -> Result<()>) -> Result<()> {
+pub fn figures(repo: &Repo) -> Result<()> {
     for test in &TESTS {
-        let runs = runs_of(test, false)?;
-        save(&format!("oliveira-test-{}-p.png", test.number), &trajectory_figure(test, &runs)?)?;
-        save(&format!("oliveira-test-{}-dt.png", test.number), &dt_figure(test, &runs)?)?;
-        save(&format!("oliveira-test-{}-frames.png", test.number), &frames_figure(test, &runs)?)?;
+        let runs = runs_of(repo, test, false)?;
+        repo.write_figure(&format!("oliveira-test-{}-p.png", test.number), &trajectory_figure(test, &runs)?)?;
+        repo.write_figure(&format!("oliveira-test-{}-dt.png", test.number), &dt_figure(test, &runs)?)?;
+        repo.write_figure(
+            &format!("oliveira-test-{}-frames.png", test.number),
+            &frames_figure(test, &runs)?,
+        )?;
     }
     Ok(())
 }
@@ -350,7 +308,7 @@ fn trajectory_figure(test: &Test, runs: &[Run]) -> Result<Image> {
         .enumerate()
         .map(|(axis, name)| {
             let mut plot = LinePlot::new(
-                format!("Test {} — particle P, {name}", roman(test.number)),
+                format!("Test {} — particle P, {name}", test.roman()),
                 "t (s)",
                 format!("{name} (m)"),
             );
@@ -366,7 +324,7 @@ fn trajectory_figure(test: &Test, runs: &[Run]) -> Result<Image> {
 
 fn dt_figure(test: &Test, runs: &[Run]) -> Result<Image> {
     let mut plot =
-        LinePlot::new(format!("Test {} — time step Δt (Eq. 4.6)", roman(test.number)), "t (s)", "Δt (s)");
+        LinePlot::new(format!("Test {} — time step Δt (Eq. 4.6)", test.roman()), "t (s)", "Δt (s)");
     plot.log_y = true;
     for r in runs {
         let pts = r.samples.iter().skip(1).map(|s| (s.t, s.dt)).collect();
@@ -375,34 +333,16 @@ fn dt_figure(test: &Test, runs: &[Run]) -> Result<Image> {
     Ok(plot.render(800, 500)?)
 }
 
-fn roman(n: usize) -> &'static str {
-    ["I", "II", "III"][n - 1]
-}
-
-/// Triangle meshes of the objects, for pictures; a half-space becomes a square around the cloth.
-fn object_meshes(cloth: &OliveiraCloth) -> Vec<TriangleMesh> {
-    cloth
-        .colliders()
-        .iter()
-        .map(|c| match &c.solid {
-            Solid::Mesh(m) => m.to_mesh(),
-            Solid::Sphere(s) => tessellate::sphere(s, 64),
-            Solid::Cylinder(c) => tessellate::cylinder(c, 96),
-            Solid::HalfSpace(h) => tessellate::plane_patch(h, DVec3::ZERO, 0.9),
-        })
-        .collect()
-}
-
 fn frames_figure(test: &Test, runs: &[Run]) -> Result<Image> {
-    let objects = object_meshes(&runs[0].cloth);
+    let objects = object_meshes(runs[0].cloth.cloth());
     let mut bounds = Aabb::EMPTY;
     for r in runs {
         for (_, x, _) in &r.snapshots {
             bounds = x.iter().fold(bounds, |b, p| b.including(*p));
         }
     }
-    for (o, c) in objects.iter().zip(runs[0].cloth.colliders()) {
-        if !matches!(c.solid, Solid::HalfSpace(_)) {
+    for (o, unbounded) in &objects {
+        if !unbounded {
             bounds = bounds.union(o.aabb());
         }
     }
@@ -411,8 +351,8 @@ fn frames_figure(test: &Test, runs: &[Run]) -> Result<Image> {
     for r in runs {
         for (t, x, _) in &r.snapshots {
             let mut meshes: Vec<RenderMesh> =
-                objects.iter().map(|o| RenderMesh::from_mesh(o, [150, 150, 160])).collect();
-            meshes.push(RenderMesh::new(x, r.cloth.triangles(), [200, 70, 70]).with_edges());
+                objects.iter().map(|(o, _)| RenderMesh::from_mesh(o, [150, 150, 160])).collect();
+            meshes.push(RenderMesh::new(x, r.cloth.cloth().triangles(), [200, 70, 70]).with_edges());
             let mut img = render(&meshes, &camera, &RenderSettings::new(360, 300))?;
             let cf = if tiles.is_empty() { format!(" (cf. {})", test.figure) } else { String::new() };
             img.label(8, 6, &format!("{} {} × {}, t = {t:.2} s{cf}", r.label, r.n, r.n), 15.0)?;

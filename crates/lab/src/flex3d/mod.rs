@@ -2,7 +2,7 @@
 //! runs it and returns what it measured. `cargo xtask reproduce` prints these beside the thesis's claims
 //! and the integration tests assert the specification's criteria on the same numbers.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anima_cloth::flex3d::mass_spring::{TABLE_4_1_STEPS, TABLE_4_1_THESIS, table_4_1};
 use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dWorld, FrictionMode};
@@ -11,9 +11,11 @@ use anima_ode::Integrator;
 use anima_scene::{LoadOptions, LoadedScene};
 use anyhow::Result;
 
+pub mod report;
+
 /// Folder of the thesis scripts, `assets/flex3d` in the repository.
 pub fn flex3d_assets() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/flex3d")
+    crate::repo::Repo::here().assets("flex3d")
 }
 
 /// One thesis scene: its script and the gravity the thesis ran it with (spec S6.0).

@@ -1,36 +1,40 @@
 //! `cargo xtask figures`: Fig. 4.1 and rendered frames of every FLEX3D scene, Oliveira's drapes and Nunes's
-//! controller figures ([`crate::nunes_figures`]) into `docs/figures/`.
+//! controller figures ([`crate::nunes::figures`]) into `docs/figures/`.
 
+use crate::flex3d::{self, ThesisScene, run_to_frame};
+use crate::picture::{camera_along, labelled_frame, scene_bounds};
+use crate::repo::Repo;
 use anima_cloth::flex3d::FrictionMode;
 use anima_cloth::flex3d::mass_spring::{SingleSpring, TABLE_4_1_STEPS, trajectory};
-use anima_lab::flex3d::{self, ThesisScene, run_to_frame};
-use anima_lab::picture::{camera_along, labelled_frame, scene_bounds};
 use anima_ode::Integrator;
 use anima_viz::{Image, LinePlot, Series};
 use anyhow::Result;
 
-pub fn run(only: Option<&str>) -> Result<()> {
-    let dir = crate::root().join("docs/figures");
-    std::fs::create_dir_all(&dir)?;
-    let save = |name: &str, img: &Image| -> Result<()> {
-        let path = dir.join(name);
-        anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
-        eprintln!("xtask: wrote docs/figures/{name}");
-        Ok(())
-    };
-    match only {
-        None => {}
-        Some("nunes") => return crate::nunes_figures::figures(&save),
-        Some(other) => anyhow::bail!("unknown figure group `{other}` (known: nunes)"),
+/// The figure groups `cargo xtask figures --only` accepts.
+pub const GROUPS: [&str; 3] = ["flex3d", "oliveira", "nunes"];
+
+/// Regenerates every figure of `docs/figures/` (or one group of them) into `repo`.
+pub fn all(repo: &Repo, only: Option<&str>) -> Result<()> {
+    if let Some(group) = only
+        && !GROUPS.contains(&group)
+    {
+        anyhow::bail!("unknown figure group `{group}` (known: {})", GROUPS.join(", "));
     }
-    save("fig-4-1-mass-spring.png", &fig_4_1()?)?;
-    save("fig-4-2-step-size.png", &fig_4_2()?)?;
-    for scene in ThesisScene::ALL {
-        eprintln!("xtask: rendering {} …", scene.slug());
-        save(&format!("flex3d-{}.png", scene.slug()), &scene_sheet(scene)?)?;
+    let wanted = |group: &str| only.is_none_or(|o| o == group);
+    if wanted("flex3d") {
+        repo.write_figure("fig-4-1-mass-spring.png", &fig_4_1()?)?;
+        repo.write_figure("fig-4-2-step-size.png", &fig_4_2()?)?;
+        for scene in ThesisScene::ALL {
+            eprintln!("anima-lab: rendering {} …", scene.slug());
+            repo.write_figure(&format!("flex3d-{}.png", scene.slug()), &scene_sheet(scene)?)?;
+        }
     }
-    crate::oliveira::figures(&save)?;
-    crate::nunes_figures::figures(&save)?;
+    if wanted("oliveira") {
+        crate::oliveira::drapes::figures(repo)?;
+    }
+    if wanted("nunes") {
+        crate::nunes::figures::figures(repo)?;
+    }
     Ok(())
 }
 

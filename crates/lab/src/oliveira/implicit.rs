@@ -10,49 +10,17 @@
 //! of the 17 × 17 mesh in each direction), at each of the thesis's snapshot times and at the end.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::ops::ControlFlow;
 use std::time::Instant;
 
-use anima_cloth::oliveira::{ContactVelocity, OliveiraCloth, StepRule};
+use anima_cloth::oliveira::{AdaptiveCloth, ContactVelocity, StepRule};
 use anima_geom::DVec3;
 use anima_ode::{Integrator, LinearSolver};
 use anima_viz::{LinePlot, Series, SeriesStyle};
 use anyhow::{Context, Result};
 
-/// One of the three drapes: its scene file and snapshot times (the last is the end time).
-struct Drape {
-    title: &'static str,
-    file: &'static str,
-    slug: &'static str,
-    snapshots: [f64; 4],
-    /// The thesis's fine-mesh wall time, s (Tables 5.2, 5.4; Test III ran no fine mesh: its
-    /// remeshing run is quoted).
-    thesis_s: f64,
-}
-
-const DRAPES: [Drape; 3] = [
-    Drape {
-        title: "Test I — Stanford Bunny",
-        file: "test-1-bunny-17x17.ron",
-        slug: "bunny",
-        snapshots: [0.1, 0.25, 0.35, 0.5],
-        thesis_s: 19237.7,
-    },
-    Drape {
-        title: "Test II — round table",
-        file: "test-2-table-17x17.ron",
-        slug: "table",
-        snapshots: [0.15, 0.5, 0.75, 1.0],
-        thesis_s: 13870.7,
-    },
-    Drape {
-        title: "Test III — sphere",
-        file: "test-3-sphere-17x17.ron",
-        slug: "sphere",
-        snapshots: [0.15, 0.3, 0.45, 0.6],
-        thesis_s: 21204.5,
-    },
-];
+use super::{DrapeTest as Drape, Ended, TESTS, run_drape, unremeshed};
+use crate::repo::Repo;
 
 /// How a run integrates.
 #[derive(Debug, Clone, Copy)]
@@ -95,12 +63,8 @@ struct Outcome {
     penetrations: usize,
 }
 
-fn scene_path(d: &Drape) -> PathBuf {
-    crate::root().join("assets/oliveira").join(d.file)
-}
-
-fn build(d: &Drape, m: &Method) -> Result<OliveiraCloth> {
-    let path = scene_path(d);
+fn build(repo: &Repo, d: &Drape, m: &Method) -> Result<AdaptiveCloth> {
+    let path = d.scene_path(repo, 17);
     let mut loaded = anima_scene::oliveira::load(&path)?;
     loaded.scene.integrator = m.integrator;
     loaded.scene.time_step = m.rule;
@@ -110,30 +74,31 @@ fn build(d: &Drape, m: &Method) -> Result<OliveiraCloth> {
     if let Some(s) = m.solver {
         cloth.stepper_mut().set_linear_solver(s);
     }
-    Ok(cloth)
+    Ok(unremeshed(cloth, loaded.scene.gravity_m_s2))
 }
 
-fn run(d: &Drape, m: &Method) -> Result<Outcome> {
-    let mut cloth = build(d, m)?;
+fn run(repo: &Repo, d: &Drape, m: &Method) -> Result<Outcome> {
+    let mut cloth = build(repo, d, m)?;
     let mut snapshots = Vec::new();
     let start = Instant::now();
-    for &t in &d.snapshots {
-        while cloth.time() < t - 1e-9 {
-            cloth.step().with_context(|| format!("{} with {}", d.title, m.label()))?;
+    let ended = run_drape(&mut cloth, d.snapshots[3], |c, _, _| {
+        let cloth = c.cloth();
+        while snapshots.len() < d.snapshots.len() && cloth.time() >= d.snapshots[snapshots.len()] - 1e-9 {
+            snapshots.push(cloth.positions().to_vec());
         }
-        snapshots.push(cloth.positions().to_vec());
+        if snapshots.len() == d.snapshots.len() { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }
+    });
+    let wall_s = start.elapsed().as_secs_f64();
+    if let Ended::Failed(e) = ended {
+        return Err(e).with_context(|| format!("{} with {}", d.short_title, m.label()));
     }
-    Ok(Outcome {
-        snapshots,
-        wall_s: start.elapsed().as_secs_f64(),
-        steps: cloth.steps(),
-        penetrations: cloth.penetrations().len(),
-    })
+    let cloth = cloth.cloth();
+    Ok(Outcome { snapshots, wall_s, steps: cloth.steps(), penetrations: cloth.penetrations().len() })
 }
 
 /// The reference run, cached under target/ (it takes a minute per scene).
-fn reference(d: &Drape, m: &Method) -> Result<Outcome> {
-    let path = crate::root().join(format!("target/anima-bench/oliveira-{}-rk4-thesis-rule.bin", d.slug));
+fn reference(repo: &Repo, d: &Drape, m: &Method) -> Result<Outcome> {
+    let path = repo.cache(format!("oliveira-{}-rk4-thesis-rule.bin", d.slug));
     let n = 17 * 17;
     if let Ok(bytes) = std::fs::read(&path) {
         let vals: Vec<f64> =
@@ -149,8 +114,8 @@ fn reference(d: &Drape, m: &Method) -> Result<Outcome> {
             });
         }
     }
-    eprintln!("xtask: {} — the reference (RK4 at the thesis's step rule) …", d.title);
-    let out = run(d, m)?;
+    eprintln!("anima-lab: {} — the reference (RK4 at the thesis's step rule) …", d.short_title);
+    let out = run(repo, d, m)?;
     let mut vals = vec![out.wall_s, out.steps as f64, out.penetrations as f64];
     vals.extend(out.snapshots.iter().flatten().flat_map(|p| p.to_array()));
     std::fs::create_dir_all(path.parent().expect("has a parent"))?;
@@ -179,7 +144,8 @@ struct Row {
     worst_error: f64,
 }
 
-pub fn reproduce() -> Result<()> {
+/// `cargo xtask reproduce oliveira-implicit`: writes `docs/reproduction/oliveira-implicit.md`.
+pub fn reproduce(repo: &Repo) -> Result<()> {
     let thesis = Method {
         integrator: Integrator::Rk4,
         rule: StepRule::Provot { beta: 1e-3, startup_dt_s: Some(1e-4) },
@@ -228,8 +194,8 @@ pub fn reproduce() -> Result<()> {
          end time and the largest over the four snapshot times of the thesis's figures. The second row, RK4 at \
          β = 2·10⁻³, shows how far the reference itself is from converged.\n\n",
     );
-    for d in &DRAPES {
-        let reference = reference(d, &thesis)?;
+    for d in &TESTS {
+        let reference = reference(repo, d, &thesis)?;
         let mut rows = vec![Row {
             method: thesis,
             end_error: 0.0,
@@ -238,8 +204,8 @@ pub fn reproduce() -> Result<()> {
             error: None,
         }];
         for m in &methods {
-            eprintln!("xtask: {} — {} at {}", d.title, m.label(), m.step_label());
-            match run(d, m) {
+            eprintln!("anima-lab: {} — {} at {}", d.short_title, m.label(), m.step_label());
+            match run(repo, d, m) {
                 Ok(out) => {
                     let errors: Vec<f64> = out
                         .snapshots
@@ -264,12 +230,9 @@ pub fn reproduce() -> Result<()> {
                 }),
             }
         }
-        section(&mut doc, d, &rows)?;
+        section(repo, &mut doc, d, &rows)?;
     }
-    let path = crate::root().join("docs/reproduction/oliveira-implicit.md");
-    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
-    eprintln!("xtask: wrote {}", path.display());
-    Ok(())
+    repo.write_text("docs/reproduction/oliveira-implicit.md", &doc)
 }
 
 impl Outcome {
@@ -283,14 +246,16 @@ impl Outcome {
     }
 }
 
-fn section(doc: &mut String, d: &Drape, rows: &[Row]) -> Result<()> {
+fn section(repo: &Repo, doc: &mut String, d: &Drape, rows: &[Row]) -> Result<()> {
     let end = d.snapshots[3];
     let _ = write!(
         doc,
         "## {} (end time {end} s)\n\nThe thesis took {} s for its fine drape (on its 2013 machine).\n\n\
          | method | step | steps | wall time | × faster than RK4 here | RMS error at {end} s | largest RMS error at {:?} s | inside an object at the end |\n\
          |---|---|---|---|---|---|---|---|\n",
-        d.title, d.thesis_s, d.snapshots
+        d.short_title,
+        d.thesis_fine_s(),
+        d.snapshots
     );
     let base = rows[0].outcome.as_ref().map_or(f64::NAN, |o| o.wall_s);
     let mut best: Option<(f64, String)> = None;
@@ -339,7 +304,7 @@ fn section(doc: &mut String, d: &Drape, rows: &[Row]) -> Result<()> {
     }
     let png = format!("oliveira-implicit-{}.png", d.slug);
     let mut plot = LinePlot::new(
-        format!("{}: error against wall time", d.title),
+        format!("{}: error against wall time", d.short_title),
         "wall time (s)",
         "largest RMS error (m)",
     );
@@ -357,9 +322,7 @@ fn section(doc: &mut String, d: &Drape, rows: &[Row]) -> Result<()> {
             plot.series.push(Series::new(label, pts, SeriesStyle::LineWithMarkers));
         }
     }
-    let img = plot.render(900, 600)?;
-    let path = crate::root().join("docs/figures").join(&png);
-    anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))?;
+    repo.write_figure(&png, &plot.render(900, 600)?)?;
     let _ = writeln!(doc, "![{}](../figures/{png})\n", d.slug);
     Ok(())
 }

@@ -9,27 +9,30 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::nunes::{self, WalkRules};
+use crate::repo::Repo;
+use crate::report::Document;
 use anima_control::optimise::{GreedySearch, Interval, Objective, Optimiser, RunLog, Stage, resume, run};
 use anima_control::{Controller, Selection};
-use anima_lab::nunes::{self, WalkRules};
 use anyhow::{Context, Result, bail};
 
 /// Seed of every thesis run (the thesis reports none, spec §9).
 pub const SEED: u64 = 2006;
 
-fn log_path(run: &str) -> PathBuf {
-    crate::root().join("target").join("nunes").join(format!("{run}.log.ron"))
+fn log_path(repo: &Repo, run: &str) -> PathBuf {
+    repo.cache(format!("nunes/{run}.log.ron"))
 }
 
 /// Runs `opt` to `budget` evaluations, one generation at a time: a stderr line per generation, the log
 /// written after each, resumed from an earlier log of the same run.
 pub fn optimise_logged<O: Optimiser + ?Sized>(
+    repo: &Repo,
     run_name: &str,
     opt: &mut O,
     objective: &(impl Objective + ?Sized),
     budget: usize,
 ) -> Result<RunLog> {
-    let path = log_path(run_name);
+    let path = log_path(repo, run_name);
     let mut log = RunLog::default();
     if let Ok(text) = std::fs::read_to_string(&path) {
         let old: RunLog = ron::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
@@ -67,35 +70,37 @@ pub fn optimise_logged<O: Optimiser + ?Sized>(
     Ok(log)
 }
 
-pub fn reproduce(which: &str) -> Result<()> {
-    let chosen: Vec<&str> = match which {
-        "" => vec!["walk", "throw", "flip"],
-        "-walk" => vec!["walk"],
-        "-throw" => vec!["throw"],
-        "-flip" => vec!["flip"],
-        other => {
-            bail!("unknown experiment `nunes{other}`; expected nunes-walk, nunes-throw, nunes-flip or nunes")
+/// The Nunes experiments of `docs/reproduction/nunes-results.md`, in its order.
+pub const EXPERIMENTS: [&str; 3] = ["walk", "throw", "flip"];
+
+/// `cargo xtask reproduce nunes[-walk|-throw|-flip]`: runs the chosen experiments and writes their
+/// sections of `docs/reproduction/nunes-results.md` (and the optimised controllers they find).
+pub fn reproduce(repo: &Repo, which: &str) -> Result<()> {
+    let chosen: Vec<&str> = match which.strip_prefix('-') {
+        None if which.is_empty() => EXPERIMENTS.to_vec(),
+        Some(e) if EXPERIMENTS.contains(&e) => vec![e],
+        _ => {
+            bail!("unknown experiment `nunes{which}`; expected nunes-walk, nunes-throw, nunes-flip or nunes")
         }
     };
-    let mut doc = String::from("# Nunes 2006 reproduction: measured results\n\n");
-    doc.push_str("Written by `cargo xtask reproduce nunes`; see `nunes.md` for the set-up.\n\n");
+    let mut doc = Document::new(
+        "# Nunes 2006 reproduction: measured results\n\nWritten by `cargo xtask reproduce nunes` (`nunes-walk`, \
+         `nunes-throw`, `nunes-flip` rewrite their own section); see `nunes.md` for the set-up.",
+        &EXPERIMENTS,
+    );
     for e in chosen {
         let start = Instant::now();
         let text = match e {
-            "walk" => walk()?,
-            "throw" => throw()?,
+            "walk" => walk(repo)?,
+            "throw" => throw(repo)?,
             "flip" => flip()?,
-            _ => unreachable!(),
+            _ => unreachable!("checked above"),
         };
-        let text = format!("{text}\n_Run time: {:.1} s._\n\n", start.elapsed().as_secs_f64());
+        eprintln!("anima-lab: nunes-{e} took {:.1} s", start.elapsed().as_secs_f64());
         print!("{text}");
-        doc.push_str(&text);
+        doc.section(e, text);
     }
-    if which.is_empty() {
-        let path = crate::root().join("docs/reproduction/nunes-results.md");
-        anima_lab::output::write_atomic(&path, |w| Ok(std::io::Write::write_all(w, doc.as_bytes())?))?;
-    }
-    Ok(())
+    repo.write_report("reproduction/nunes-results.md", &doc)
 }
 
 /// The walking controller with the four sensor thresholds set to `x`.
@@ -126,14 +131,14 @@ pub fn walk_stages(n: usize) -> Vec<Stage> {
 
 /// The thesis's main walking experiment (spec §8.1.4–§8.1.6): 15 global + 30 one-parameter
 /// evaluations of the greedy search over p2, p3, p5, p6 ∈ [−0.25, 0.75].
-fn walk() -> Result<String> {
-    let base = nunes::parse(nunes::WALK_RON)?;
+fn walk(repo: &Repo) -> Result<String> {
+    let base = nunes::controller("walk")?;
     let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
     let space = base.space(&ids);
     let x0 = base.values_of(&ids);
     let mut opt = GreedySearch::new(space, walk_stages(ids.len()), x0.clone(), SEED)?;
     let objective = |x: &[f64]| walk_fitness(&base, x);
-    let log = optimise_logged("walk-greedy", &mut opt, &objective, 46)?;
+    let log = optimise_logged(repo, "walk-greedy", &mut opt, &objective, 46)?;
 
     let before = long_run(walker(&base, &x0), 1000)?;
     let best = log.best().context("empty log")?;
@@ -149,9 +154,7 @@ fn walk() -> Result<String> {
         best.x.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", ")
     );
     let text = format!("{header}{}", winner.to_ron());
-    anima_lab::output::write_atomic(&crate::root().join("assets/controllers/walk-optimised.ron"), |w| {
-        Ok(std::io::Write::write_all(w, text.as_bytes())?)
-    })?;
+    repo.write_text("assets/controllers/walk-optimised.ron", &text)?;
 
     let mut s = String::from("## Walking (spec §8.1, Table 6.3)\n\n");
     s.push_str(
@@ -211,14 +214,14 @@ fn walk() -> Result<String> {
         .map(|e| format!("{:.3}", e.fitness))
         .collect();
     let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
-    s.push_str(&walk_variants()?);
+    s.push_str(&walk_variants(repo)?);
     Ok(s)
 }
 
 /// The thesis's variants A (symmetric thresholds) and B (temporal transitions), each optimised as the
 /// main experiment is: 15 global + 30 one-parameter draws of the greedy search over its free
 /// parameters, seed 2006.
-fn walk_variants() -> Result<String> {
+fn walk_variants(repo: &Repo) -> Result<String> {
     let mut s = String::from("\n### Variants (spec §8.1.7, §8.1.8)\n\n");
     s.push_str(
         "| variant | free parameters | thesis: fitness after 45 evaluations | anima | thesis: long run | anima: long run |\n",
@@ -227,27 +230,27 @@ fn walk_variants() -> Result<String> {
     let variants = [
         (
             "A: E1 copies p2 → p5, p3 → p6 (`walk-symmetric.ron`)",
-            nunes::WALK_SYMMETRIC_RON,
+            "walk-symmetric",
             "walk-symmetric-greedy",
             "10.030",
             "100.739 m, then falls",
         ),
         (
             "B: T2, T3, T5, T6 temporal (`walk-temporal.ron`)",
-            nunes::WALK_TEMPORAL_RON,
+            "walk-temporal",
             "walk-temporal-greedy",
             "0 (6.332 without the fall penalty)",
             "falls before 1000 iterations",
         ),
     ];
     for (name, text, run_name, thesis_fit, thesis_long) in variants {
-        let base = nunes::parse(text)?;
+        let base = nunes::controller(text)?;
         let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
         let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
         let x0 = base.values_of(&ids);
         let mut opt = GreedySearch::new(base.space(&ids), walk_stages(ids.len()), x0, SEED)?;
         let objective = |x: &[f64]| walk_fitness(&base, x);
-        let log = optimise_logged(run_name, &mut opt, &objective, 46)?;
+        let log = optimise_logged(repo, run_name, &mut opt, &objective, 46)?;
         let best = log.best().context("empty log")?;
         let long = long_run(walker(&base, &best.x), 20_000)?;
         let _ = writeln!(
@@ -297,8 +300,8 @@ pub fn throw_stage(base: &Controller, ids: &[anima_control::ParamId], evaluation
 
 /// The thesis's throw optimisation (spec §8.3.2): 400 evaluations, each modifying either (s1, e1)
 /// or (s2, e2, τ2) in a window of ±25 % of the interval centred on the current value.
-fn throw() -> Result<String> {
-    let base = nunes::parse(nunes::THROW_RON)?;
+fn throw(repo: &Repo) -> Result<String> {
+    let base = nunes::controller("throw")?;
     let ids = base.free_params(&Selection::all());
     let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
     let space = base.space(&ids);
@@ -306,7 +309,7 @@ fn throw() -> Result<String> {
     let mut opt = GreedySearch::new(space, vec![throw_stage(&base, &ids, 400)], x0.clone(), SEED)?;
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
     let objective = |x: &[f64]| throw_fitness(&base, &ids, x, cap);
-    let log = optimise_logged("throw-greedy-capped", &mut opt, &objective, 401)?;
+    let log = optimise_logged(repo, "throw-greedy-capped", &mut opt, &objective, 401)?;
     let best = log.best().context("empty log")?;
     let outcome = |x: &[f64]| -> Result<nunes::ThrowOutcome> {
         let mut c = base.clone();
@@ -316,9 +319,9 @@ fn throw() -> Result<String> {
     let (before, after) = (outcome(&x0)?, outcome(&best.x)?);
     let mut winner = base.clone();
     winner.apply(&ids, &best.x);
-    std::fs::write(
-        crate::root().join("assets/controllers/throw-optimised.ron"),
-        format!(
+    repo.write_text(
+        "assets/controllers/throw-optimised.ron",
+        &format!(
             "// The throwing controller after the thesis's optimisation (spec §8.3.2): `cargo xtask reproduce\n\
              // nunes-throw`, 400 evaluations of Eq. 6.1 with the height cap [RECON], seed {SEED}.\n\
              // Everything else is assets/controllers/throw.ron.\n{}",
@@ -377,7 +380,7 @@ pub const FLIP_ITERATIONS: u64 = 600;
 /// The assisted backflip (spec §8.4): `assets/controllers/backflip.ron` run once; the thesis reports
 /// no numbers, so the table checks the qualitative outcomes of spec §8.5 item 8.
 fn flip() -> Result<String> {
-    let c = nunes::parse(nunes::BACKFLIP_RON)?;
+    let c = nunes::controller("backflip")?;
     let t = Instant::now();
     let o = nunes::backflip(c, nunes::FLIP_SPACING, FLIP_ITERATIONS, |_| ())?;
     let per_iteration = t.elapsed().as_secs_f64() / o.iterations as f64;

@@ -8,72 +8,21 @@
 //! reference, with a per-test verdict on whether the best remesher is 2× cheaper at equal error.
 
 use std::fmt::Write as _;
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, ContactVelocity, OliveiraCloth, OliveiraRemeshing, RemeshStats,
-    ShortEdgeRule, SizingRemeshing, StepRule, SubdivisionRemeshing, criteria::interpolate_at,
+    AdaptiveCloth, AdaptiveMethod, ContactVelocity, OliveiraRemeshing, RemeshStats, ShortEdgeRule,
+    SizingRemeshing, StepRule, SubdivisionRemeshing,
 };
-use anima_geom::query::tessellate;
-use anima_geom::{Aabb, DVec2, DVec3, Solid, TriangleMesh};
+use anima_geom::{Aabb, DVec3, TriangleMesh};
 use anima_ode::Integrator;
 use anima_viz::{Camera, Image, LinePlot, RenderMesh, RenderSettings, Series, render};
 use anyhow::{Context, Result, bail};
 
-struct Test {
-    number: usize,
-    slug: &'static str,
-    title: &'static str,
-    /// The thesis's snapshot times, s.
-    snapshots: [f64; 4],
-    /// Simulated time of the shortened runs (`ANIMA_ADAPTIVE_SHORT=1`), s; the full runs simulate the
-    /// thesis's last snapshot time.
-    short: f64,
-    table: &'static str,
-    thesis: &'static [(&'static str, f64, u64, f64)],
-    remeshing: fn() -> OliveiraRemeshing,
-}
-
-const TESTS: [Test; 3] = [
-    Test {
-        number: 1,
-        slug: "bunny",
-        title: "Test I — cloth on the Stanford Bunny",
-        snapshots: [0.1, 0.25, 0.35, 0.5],
-        short: 0.2,
-        table: "Table 5.2",
-        thesis: &[
-            ("coarse 5 × 5", 24.8, 2236, 0.01109),
-            ("adaptive", 10401.7, 134127, 0.07755),
-            ("fine 17 × 17", 19237.7, 174312, 0.11036),
-        ],
-        remeshing: OliveiraRemeshing::test_1,
-    },
-    Test {
-        number: 2,
-        slug: "table",
-        title: "Test II — tablecloth on a round table",
-        snapshots: [0.15, 0.5, 0.75, 1.0],
-        short: 0.2,
-        table: "Table 5.4",
-        thesis: &[
-            ("coarse 5 × 5", 14.3, 4391, 0.00326),
-            ("adaptive", 35986.4, 1020828, 0.03525),
-            ("fine 17 × 17", 13870.7, 346795, 0.03999),
-        ],
-        remeshing: OliveiraRemeshing::test_2,
-    },
-    Test {
-        number: 3,
-        slug: "sphere",
-        title: "Test III — cloth on a sphere",
-        snapshots: [0.15, 0.3, 0.45, 0.6],
-        short: 0.3,
-        table: "Table 5.6",
-        thesis: &[("1-to-4 subdivision", 20086.4, 122509, 0.16395), ("remeshing", 21204.5, 269071, 0.07880)],
-        remeshing: OliveiraRemeshing::test_3,
-    },
-];
+use super::{DrapeTest as Test, Ended, at_material_points, object_meshes, rms, run_drape};
+use crate::repo::Repo;
+use crate::report::Document;
 
 /// What one run uses.
 #[derive(Clone, Copy)]
@@ -166,37 +115,27 @@ struct Run {
     objects: Vec<(TriangleMesh, bool)>,
 }
 
-impl Test {
-    /// Simulated time, s: the thesis's full duration, or `short` with `ANIMA_ADAPTIVE_SHORT=1`.
-    fn duration(&self) -> f64 {
-        if std::env::var("ANIMA_ADAPTIVE_SHORT").is_ok_and(|v| v == "1") {
-            self.short
-        } else {
-            self.snapshots[3]
-        }
-    }
-}
-
-fn scene_path(test: &Test, n: usize) -> std::path::PathBuf {
-    crate::root().join(format!("assets/oliveira/test-{}-{}-{n}x{n}.ron", test.number, test.slug))
+/// Simulated time, s: the thesis's full duration, or `short` with `ANIMA_ADAPTIVE_SHORT=1`.
+fn duration(test: &Test) -> f64 {
+    if std::env::var("ANIMA_ADAPTIVE_SHORT").is_ok_and(|v| v == "1") { test.short } else { test.snapshots[3] }
 }
 
 /// The evaluation (and picture) times: the thesis's snapshot times that fall within our duration, or
 /// four evenly spaced times when none beyond the first does.
 fn eval_times(test: &Test) -> Vec<f64> {
-    let inside: Vec<f64> = test.snapshots.iter().copied().filter(|&t| t <= test.duration() + 1e-9).collect();
-    if inside.len() >= 3 { inside } else { (1..=4).map(|k| test.duration() * k as f64 / 4.0).collect() }
+    let inside: Vec<f64> = test.snapshots.iter().copied().filter(|&t| t <= duration(test) + 1e-9).collect();
+    if inside.len() >= 3 { inside } else { (1..=4).map(|k| duration(test) * k as f64 / 4.0).collect() }
 }
 
 /// `implicit`: backward Euler at this fixed step, s, instead of RK4 at the thesis's step rule.
-fn build(test: &Test, kind: Kind, implicit: Option<f64>) -> Result<AdaptiveCloth> {
+fn build(repo: &Repo, test: &Test, kind: Kind, implicit: Option<f64>) -> Result<AdaptiveCloth> {
     let n = match kind {
         Kind::Uniform(n, _) => n,
         _ => 5,
     };
     // The 9 × 9 and 13 × 13 meshes come from the coarse file with another grid.
     let file_n = if n == 17 { 17 } else { 5 };
-    let mut loaded = anima_scene::oliveira::load(&scene_path(test, file_n))?;
+    let mut loaded = anima_scene::oliveira::load(&test.scene_path(repo, file_n))?;
     loaded.scene.cloth.vertices_per_side = n;
     loaded.scene.cloth.tracked_vertex = (0, 0);
     let beta = match kind {
@@ -234,12 +173,8 @@ fn build(test: &Test, kind: Kind, implicit: Option<f64>) -> Result<AdaptiveCloth
     Ok(AdaptiveCloth::new(cloth, loaded.scene.gravity_m_s2, method))
 }
 
-fn material_points() -> Vec<DVec2> {
-    (0..5).flat_map(|r| (0..5).map(move |c| DVec2::new(c as f64 * 0.25, r as f64 * 0.25))).collect()
-}
-
-fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> Result<Run> {
-    let mut c = build(test, kind, implicit)?;
+fn run(repo: &Repo, test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> Result<Run> {
+    let mut c = build(repo, test, kind, implicit)?;
     let times = eval_times(test);
     let sample = |c: &AdaptiveCloth, dt: f64| {
         let cl = c.cloth();
@@ -259,51 +194,44 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
     let mut frames = Vec::new();
     let mut next = 0;
     let mut last_t = 0.0;
-    let duration = test.duration();
+    let duration = duration(test);
     let every = duration / 1500.0;
     let start = Instant::now();
     let mut last_report = Instant::now();
     let mut stopped_at = None;
     let mut failure = None;
-    while c.cloth().time() < duration {
-        let r = match c.step() {
-            Ok(r) => r,
-            Err(e) => {
-                // A run that blows up is a result (the literal short-edge rule can): kept, marked.
-                eprintln!("xtask:   {label}: failed: {e}");
-                stopped_at = Some(c.cloth().time());
-                failure = Some(e.to_string());
-                break;
-            }
-        };
+    let ended = run_drape(&mut c, duration, |c, r, _| {
         let t = c.cloth().time();
         if t - last_t >= every {
-            samples.push(sample(&c, r.dt));
+            samples.push(sample(c, r.dt));
             last_t = t;
         }
         while next < times.len() && t >= times[next] - 1e-9 {
             let cl = c.cloth();
-            let pts = material_points()
-                .iter()
-                .map(|&p| interpolate_at(cl.mesh().rest(), cl.triangles(), cl.positions(), p))
-                .collect();
-            points.push(pts);
+            points.push(at_material_points(cl));
             frames.push((t, cl.positions().to_vec(), cl.triangles().to_vec()));
             next += 1;
         }
         if start.elapsed().as_secs_f64() > RUN_WALL_CAP_S {
             stopped_at = Some(t);
-            eprintln!("xtask:   {label}: stopped at t = {t:.4} s after {RUN_WALL_CAP_S} s of wall time");
-            break;
+            eprintln!("anima-lab:   {label}: stopped at t = {t:.4} s after {RUN_WALL_CAP_S} s of wall time");
+            return ControlFlow::Break(());
         }
         if last_report.elapsed().as_secs_f64() > 10.0 {
             eprintln!(
-                "xtask:   {label}: t = {t:.4} s, {} faces, Δt = {:.2e} s",
+                "anima-lab:   {label}: t = {t:.4} s, {} faces, Δt = {:.2e} s",
                 c.cloth().mesh().n_faces(),
                 r.dt
             );
             last_report = Instant::now();
         }
+        ControlFlow::Continue(())
+    });
+    if let Ended::Failed(e) = ended {
+        // A run that blows up is a result (the literal short-edge rule can): kept, marked.
+        eprintln!("anima-lab:   {label}: failed: {e}");
+        stopped_at = Some(c.cloth().time());
+        failure = Some(e.to_string());
     }
     let wall_s = start.elapsed().as_secs_f64();
     samples.push(sample(&c, c.cloth().next_dt()));
@@ -325,40 +253,23 @@ fn run(test: &Test, kind: Kind, label: &'static str, implicit: Option<f64>) -> R
     })
 }
 
-fn rms(a: &[Vec<DVec3>], b: &[Vec<DVec3>]) -> f64 {
-    let (mut s, mut n) = (0.0, 0);
-    for (pa, pb) in a.iter().zip(b) {
-        for (x, y) in pa.iter().zip(pb) {
-            s += x.distance_squared(*y);
-            n += 1;
-        }
-    }
-    (s / n.max(1) as f64).sqrt()
-}
-
 /// `reproduce oliveira[-N] --adaptive`.
-pub fn reproduce(which: &str) -> Result<()> {
-    let chosen: Vec<&Test> = match which {
-        "" | "-all" => TESTS.iter().collect(),
-        "-1" => vec![&TESTS[0]],
-        "-2" => vec![&TESTS[1]],
-        "-3" => vec![&TESTS[2]],
-        other => bail!("unknown experiment `oliveira{other}`"),
-    };
+pub fn reproduce(repo: &Repo, which: &str) -> Result<()> {
+    let Some(chosen) = Test::select(which) else { bail!("unknown experiment `oliveira{which}`") };
     let only: Option<Vec<usize>> = std::env::var("ANIMA_ADAPTIVE_ONLY")
         .ok()
         .map(|s| s.split(',').filter_map(|k| k.trim().parse().ok()).collect());
-    let mut doc = String::new();
+    let mut doc = Document::new(HEADER, &SECTIONS);
     for test in chosen {
         let mut runs = Vec::new();
         for (i, &(kind, label)) in KINDS.iter().enumerate() {
             if only.as_ref().is_some_and(|o| !o.contains(&i)) {
                 continue;
             }
-            eprintln!("xtask: {} — {label} …", test.title);
-            let r = run(test, kind, label, None)?;
+            eprintln!("anima-lab: {} — {label} …", test.title);
+            let r = run(repo, test, kind, label, None)?;
             eprintln!(
-                "xtask:   {label}: {:.1} s wall, {} steps, {} faces at the end",
+                "anima-lab:   {label}: {:.1} s wall, {} steps, {} faces at the end",
                 r.wall_s,
                 r.steps,
                 r.samples.last().map_or(0, |s| s.nf)
@@ -370,36 +281,37 @@ pub fn reproduce(which: &str) -> Result<()> {
             if only.as_ref().is_some_and(|o| !o.contains(&(KINDS.len() + i))) {
                 continue;
             }
-            eprintln!("xtask: {} — backward Euler, {label} …", test.title);
-            let mut r = run(test, kind, label, Some(IMPLICIT_DT_S))?;
+            eprintln!("anima-lab: {} — backward Euler, {label} …", test.title);
+            let mut r = run(repo, test, kind, label, Some(IMPLICIT_DT_S))?;
             // These runs take a tenth of a second: the fastest of several is the wall time reported.
             for _ in 1..IMPLICIT_REPEATS {
-                r.wall_s = r.wall_s.min(run(test, kind, label, Some(IMPLICIT_DT_S))?.wall_s);
+                r.wall_s = r.wall_s.min(run(repo, test, kind, label, Some(IMPLICIT_DT_S))?.wall_s);
             }
             eprintln!(
-                "xtask:   backward Euler, {label}: {:.1} s wall, {} steps, {} faces at the end",
+                "anima-lab:   backward Euler, {label}: {:.1} s wall, {} steps, {} faces at the end",
                 r.wall_s,
                 r.steps,
                 r.samples.last().map_or(0, |s| s.nf)
             );
             implicit_runs.push(r);
         }
-        let text = report(test, &runs, &implicit_runs)?;
+        let text = report(repo, test, &runs, &implicit_runs)?;
         print!("{text}");
-        doc.push_str(&text);
+        doc.section(SECTIONS[test.number - 1], text);
     }
     if only.is_none() {
-        let path = crate::root().join("docs/reproduction/oliveira-adaptive.md");
-        let full = format!("{HEADER}{doc}{NOTES}");
-        anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(full.as_bytes())?))?;
-        eprintln!("xtask: wrote {}", path.display());
+        doc.section("notes", NOTES);
+        repo.write_report("reproduction/oliveira-adaptive.md", &doc)?;
     }
     Ok(())
 }
 
+/// The sections of `docs/reproduction/oliveira-adaptive.md`.
+const SECTIONS: [&str; 4] = ["test-1", "test-2", "test-3", "notes"];
+
 const HEADER: &str = "# Oliveira 2013 reproduction: adaptive meshes\n\n\
-_Generated by `cargo xtask reproduce oliveira --adaptive` (or `oliveira-N --adaptive` for one test, which \
-prints without writing); do not edit by hand. The static-mesh reproduction is [oliveira.md](oliveira.md)._\n\n\
+_Generated by `cargo xtask reproduce oliveira --adaptive` (`oliveira-N --adaptive` rewrites test N's section \
+only); do not edit by hand. The static-mesh reproduction is [oliveira.md](oliveira.md)._\n\n\
 Each test is run on four uniform meshes (5 × 5 and 17 × 17 from the scene files with the thesis's β; 9 × 9 and \
 13 × 13 with β = 0.001) and with three remeshers started from the 5 × 5 mesh at β = 0.001 (the thesis's adaptive \
 β): the thesis's remesher (`AdaptiveMethod::Oliveira`, spec §6; with RK4 twice, under each short-edge rule), \
@@ -449,10 +361,10 @@ are never stamped, §6.7) a flat region would otherwise be regenerated at the sa
 * **Timing.** One core of a 2-core machine that was running other work at the same time: wall times are good to \
 ±30 %.\n";
 
-fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
+fn report(repo: &Repo, test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     let mut s = String::new();
     writeln!(s, "## {}\n", test.title)?;
-    writeln!(s, "Simulated {} s (thesis: {} s).\n", test.duration(), test.snapshots[3])?;
+    writeln!(s, "Simulated {} s (thesis: {} s).\n", duration(test), test.snapshots[3])?;
     writeln!(
         s,
         "{} beside ours (thesis: 2013 Core 2 Quad, full duration; a \"frame\" is one step).\n",
@@ -556,7 +468,7 @@ fn report(test: &Test, runs: &[Run], implicit: &[Run]) -> Result<String> {
     if !implicit.is_empty() {
         s.push_str(&implicit_report(runs, implicit)?);
     }
-    let figs = figures(test, runs)?;
+    let figs = figures(repo, test, runs)?;
     for (name, caption) in figs {
         writeln!(s, "![{caption}](../figures/{name})\n")?;
     }
@@ -591,7 +503,7 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
     if variants.is_empty() {
         return Ok(String::new());
     }
-    let end = test.duration();
+    let end = duration(test);
     let per_step = |r: &Run| r.wall_s / r.steps.max(1) as f64;
     let last = |r: &Run| *r.samples.last().expect("samples");
     type Check<'a> = Box<dyn Fn(&Run) -> String + 'a>;
@@ -867,11 +779,9 @@ fn implicit_report(rk4: &[Run], runs: &[Run]) -> Result<String> {
     Ok(s)
 }
 
-fn figures(test: &Test, runs: &[Run]) -> Result<Vec<(String, String)>> {
-    let dir = crate::root().join("docs/figures");
-    std::fs::create_dir_all(&dir)?;
+fn figures(repo: &Repo, test: &Test, runs: &[Run]) -> Result<Vec<(String, String)>> {
     let save = |name: String, img: &Image| -> Result<String> {
-        anima_lab::output::write_atomic(&dir.join(&name), |w| Ok(img.write_png(w)?))?;
+        repo.write_figure(&name, img)?;
         Ok(name)
     };
     let n = test.number;
@@ -931,19 +841,6 @@ fn figures(test: &Test, runs: &[Run]) -> Result<Vec<(String, String)>> {
         format!("Test {n}: the adaptive meshes at the evaluation times (cf. Figs 5.2, 5.7, 5.12)"),
     ));
     Ok(out)
-}
-
-fn object_meshes(cloth: &OliveiraCloth) -> Vec<(TriangleMesh, bool)> {
-    cloth
-        .colliders()
-        .iter()
-        .map(|c| match &c.solid {
-            Solid::Mesh(m) => (m.to_mesh(), false),
-            Solid::Sphere(s) => (tessellate::sphere(s, 64), false),
-            Solid::Cylinder(c) => (tessellate::cylinder(c, 96), false),
-            Solid::HalfSpace(h) => (tessellate::plane_patch(h, DVec3::ZERO, 0.9), true),
-        })
-        .collect()
 }
 
 fn frames(runs: &[Run]) -> Result<Image> {

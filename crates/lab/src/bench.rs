@@ -3,7 +3,6 @@
 //! plots in `docs/figures/`.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anima_cloth::flex3d::mass_spring::SingleSpring;
@@ -14,6 +13,8 @@ use anima_ode::stability::{max_frequency, stability_limit};
 use anima_ode::{Integrator, LinearSolver, State, StepControl, Stepper, integrate};
 use anima_viz::{LinePlot, Series, SeriesStyle};
 use anyhow::{Context, Result};
+
+use crate::repo::Repo;
 
 /// One measured run: wall time (s), error, step (or tolerance) used.
 #[derive(Debug, Clone, Copy)]
@@ -50,14 +51,10 @@ impl Curve {
     }
 }
 
-fn cache_dir() -> PathBuf {
-    crate::root().join("target/anima-bench")
-}
-
 // ------------------------------------------------------------------------------------- sheets
 
-/// A sheet scene of the study: its spec, duration and reference.
-struct SheetScene {
+/// A sheet scene of the study: its spec and duration, and the reference centre of mass.
+struct BenchSheet {
     name: &'static str,
     title: String,
     spec: SheetSpec,
@@ -68,7 +65,7 @@ struct SheetScene {
 
 /// Runs a sheet; returns final positions and wall time, or None if it went non-finite or wild.
 fn run_sheet(
-    scene: &SheetScene,
+    scene: &BenchSheet,
     integrator: Integrator,
     solver: Option<LinearSolver>,
     control: StepControl,
@@ -120,8 +117,8 @@ fn run_sheet(
 }
 
 /// The converged reference: RK4 at 10⁻⁵ s, cached under target/.
-fn reference(scene: &SheetScene) -> Result<Vec<DVec3>> {
-    let path = cache_dir().join(format!("{}-rk4-1e-5.bin", scene.name));
+fn reference(repo: &Repo, scene: &BenchSheet) -> Result<Vec<DVec3>> {
+    let path = repo.cache(format!("bench/{}-rk4-1e-5.bin", scene.name));
     if let Ok(bytes) = std::fs::read(&path) {
         let vals: Vec<f64> =
             bytes.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
@@ -129,17 +126,17 @@ fn reference(scene: &SheetScene) -> Result<Vec<DVec3>> {
             return Ok(vals.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect());
         }
     }
-    eprintln!("xtask: computing the reference for {} (RK4, 1e-5 s) …", scene.name);
+    eprintln!("anima-lab: computing the reference for {} (RK4, 1e-5 s) …", scene.name);
     let (x, secs) = run_sheet(scene, Integrator::Rk4, None, StepControl::Constant { dt: 1e-5 })
         .context("reference diverged")?;
-    eprintln!("xtask: reference took {secs:.1} s");
-    std::fs::create_dir_all(cache_dir())?;
+    eprintln!("anima-lab: reference took {secs:.1} s");
+    std::fs::create_dir_all(path.parent().expect("a cache folder"))?;
     let bytes: Vec<u8> = x.iter().flat_map(|p| p.to_array()).flat_map(f64::to_le_bytes).collect();
     std::fs::write(&path, bytes)?;
     Ok(x)
 }
 
-fn measure(scene: &SheetScene, knob: f64, seconds: f64, x: &[DVec3], reference: &[DVec3]) -> Point {
+fn measure(scene: &BenchSheet, knob: f64, seconds: f64, x: &[DVec3], reference: &[DVec3]) -> Point {
     let com = scene.spec.build().centre_of_mass(x);
     let com_error = scene.com_reference.map_or(f64::NAN, |r| com.distance(r));
     Point { knob, seconds, error: rms(x, reference), com_error }
@@ -151,7 +148,7 @@ fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
 
 /// Largest constant step (log bisection between 10⁻⁶ and 0.1 s) at which the sheet stays finite and slow
 /// for its whole duration.
-fn largest_stable_step(scene: &SheetScene, integrator: Integrator) -> f64 {
+fn largest_stable_step(scene: &BenchSheet, integrator: Integrator) -> f64 {
     let stable = |dt: f64| run_sheet(scene, integrator, None, StepControl::Constant { dt }).is_some();
     let (mut lo, mut hi) = (1e-6f64, 0.1f64);
     if stable(hi) {
@@ -164,8 +161,8 @@ fn largest_stable_step(scene: &SheetScene, integrator: Integrator) -> f64 {
     lo
 }
 
-fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec3>)> {
-    let reference = reference(scene)?;
+fn sheet_curves(repo: &Repo, scene: &BenchSheet, quick: bool) -> Result<(Vec<Curve>, Vec<DVec3>)> {
+    let reference = reference(repo, scene)?;
     let mut curves = Vec::new();
     // Each implicit method twice: with conjugate gradients and with the sparse Cholesky solve.
     let variants = Integrator::ALL.into_iter().flat_map(|i| {
@@ -184,7 +181,7 @@ fn sheet_curves(scene: &SheetScene, quick: bool) -> Result<(Vec<Curve>, Vec<DVec
             continue;
         }
         let mut curve = Curve { solver, ..Curve::new(integrator) };
-        eprintln!("xtask: {} — {}", scene.name, curve.label());
+        eprintln!("anima-lab: {} — {}", scene.name, curve.label());
         let adaptive = |tols: &[f64]| -> Vec<(f64, StepControl)> {
             let control =
                 |tol| StepControl::Adaptive { tolerance: tol, dt_initial: 1e-4, dt_min: 1e-7, dt_max: 0.01 };
@@ -334,11 +331,6 @@ fn plot(title: &str, curves: &[Curve], error_label: &str) -> Result<anima_viz::I
     Ok(p.render(900, 600)?)
 }
 
-fn save(name: &str, img: &anima_viz::Image) -> Result<()> {
-    let path = crate::root().join("docs/figures").join(name);
-    anima_lab::output::write_atomic(&path, |w| Ok(img.write_png(w)?))
-}
-
 fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_label: &str, stable_unit: &str) {
     let _ = write!(out, "| integrator | {stable_label} |");
     for (_, l) in levels {
@@ -382,7 +374,9 @@ fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_labe
     out.push('\n');
 }
 
-pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
+/// `cargo xtask bench [--quick] [--only SCENE]`: measures and writes `docs/benchmarks.md` (or prints one
+/// scene's table).
+pub fn run(repo: &Repo, quick: bool, only: Option<&str>) -> Result<()> {
     let mut doc = String::new();
     let machine = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -403,21 +397,21 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
 
     // The sheets of (b) and (c).
     let scenes = [
-        SheetScene {
+        BenchSheet {
             name: "standard-32",
             title: "(b) standard sheet, N = 32".into(),
             spec: SheetSpec::standard(32),
             duration: 1.0,
             com_reference: Some(DVec3::new(0.4999997, -0.4792614, 1.4655051)),
         },
-        SheetScene {
+        BenchSheet {
             name: "standard-64",
             title: "(b) standard sheet, N = 64".into(),
             spec: SheetSpec::standard(64),
             duration: 1.0,
             com_reference: Some(DVec3::new(0.5000605, -0.4684101, 1.4631486)),
         },
-        SheetScene {
+        BenchSheet {
             name: "oliveira-32",
             title: "(c) Oliveira's cloth (E = 10⁷ N/m²), N = 32".into(),
             spec: SheetSpec::oliveira_cloth(32),
@@ -429,7 +423,7 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
         let scene = scenes.iter().find(|s| s.name == name).with_context(|| {
             format!("no sheet scene `{name}`; expected standard-32, standard-64 or oliveira-32")
         })?;
-        let (curves, _) = sheet_curves(scene, quick)?;
+        let (curves, _) = sheet_curves(repo, scene, quick)?;
         let mut out = String::new();
         table(
             &mut out,
@@ -443,9 +437,9 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
     }
 
     // (a) Table 4.1 spring.
-    eprintln!("xtask: mass–spring …");
+    eprintln!("anima-lab: mass–spring …");
     let curves = mass_spring_curves();
-    save(
+    repo.write_figure(
         "bench-mass-spring.png",
         &plot("Table 4.1 spring: error against wall time", &curves, "max |x − (2 + 2 cos t)|, t ≤ 10")?,
     )?;
@@ -456,9 +450,9 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
 
     let mut peers = String::new();
     for scene in &scenes {
-        let (curves, _) = sheet_curves(scene, quick)?;
+        let (curves, _) = sheet_curves(repo, scene, quick)?;
         let png = format!("bench-{}.png", scene.name);
-        save(&png, &plot(&scene.title, &curves, "RMS position error (m)")?)?;
+        repo.write_figure(&png, &plot(&scene.title, &curves, "RMS position error (m)")?)?;
         let (m, k) = scene.spec.build().stiffest();
         let _ = write!(
             doc,
@@ -484,13 +478,10 @@ pub fn run(quick: bool, only: Option<&str>) -> Result<()> {
     doc.push_str(&peers_section(&peers));
 
     // Stability map.
-    eprintln!("xtask: stability map …");
-    doc.push_str(&stability_map()?);
+    eprintln!("anima-lab: stability map …");
+    doc.push_str(&stability_map(repo)?);
 
-    let path = crate::root().join("docs/benchmarks.md");
-    anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(doc.as_bytes())?))?;
-    eprintln!("xtask: wrote {}", path.display());
-    Ok(())
+    repo.write_text("docs/benchmarks.md", &doc)
 }
 
 /// The peers' numbers from `benchmarks.md` (wall time for 1 s; N = 32, N = 64), measured there on this
@@ -508,7 +499,7 @@ const PEERS: [(&str, &str, &str, &str); 7] = [
 /// Fastest peer time for N = 32 and N = 64, s (Warp).
 const FASTEST_PEER: [f64; 2] = [0.34, 4.29];
 
-fn peer_table(scene: &SheetScene, curves: &[Curve]) -> String {
+fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
     let n = scene.spec.n;
     let (common, fastest) = if n <= 32 { (2e-4, FASTEST_PEER[0]) } else { (1e-4, FASTEST_PEER[1]) };
     let mut out = format!(
@@ -571,7 +562,7 @@ fn peers_section(tables: &str) -> String {
 
 /// Largest stable step against stiffness for each explicit method on a 16×16 undamped sheet, beside the
 /// bound h·ω_max = (the method's measured interval) with ω_max from power iteration.
-fn stability_map() -> Result<String> {
+fn stability_map(repo: &Repo) -> Result<String> {
     let mut out = String::from(
         "## Stability map\n\nLargest constant step that keeps a 16 × 16 standard sheet (undamped) finite and below 100 m/s \
          for 0.5 s, against its structural stiffness (shear at half, bend fixed), beside the theoretical bound \
@@ -603,7 +594,7 @@ fn stability_map() -> Result<String> {
         let omega = max_frequency(&mut net, 0.0, &x, &vec![DVec3::ZERO; x.len()], &frozen, 200);
         let _ = write!(out, "| {k:.0e} | {omega:.0} |");
         let scene =
-            SheetScene { name: "map", title: String::new(), spec, duration: 0.5, com_reference: None };
+            BenchSheet { name: "map", title: String::new(), spec, duration: 0.5, com_reference: None };
         for (m, measured, bound) in &mut series {
             let limit = stability_limit(*m) / omega;
             let got = largest_stable_step(&scene, *m);
@@ -624,7 +615,7 @@ fn stability_map() -> Result<String> {
         p.series.push(Series::new(format!("{m} measured"), measured, SeriesStyle::LineWithMarkers));
         p.series.push(Series::new(format!("{m} bound"), bound, SeriesStyle::Dashed));
     }
-    save("bench-stability-map.png", &p.render(900, 600)?)?;
+    repo.write_figure("bench-stability-map.png", &p.render(900, 600)?)?;
     out.push_str("\nForward Euler and midpoint have no stable interval on the imaginary axis: undamped, they grow at \
                   every step, and only damping lets them run.\n\n![stability map](figures/bench-stability-map.png)\n\n");
     Ok(out)
