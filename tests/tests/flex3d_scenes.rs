@@ -2,13 +2,13 @@
 
 use anima_cloth::flex3d::Flex3dWorld;
 use anima_lab::flex3d::{ThesisScene, flex3d_assets};
-use anima_lab::run::flex3d::{RunOptions, run};
+use anima_lab::run::flex3d::run;
+use anima_lab::run::{Detail, RunOptions, Silent};
 use anima_scene::LoadOptions;
 
 /// Runs a loaded scene for `steps` steps and returns the final positions.
-fn positions_after(loaded: &anima_scene::LoadedScene, steps: usize) -> Vec<anima_geom::DVec3> {
-    let objects = loaded.objects.iter().map(|(_, m)| m.clone()).collect();
-    let mut world = Flex3dWorld::new(&loaded.scene, objects).unwrap();
+fn positions_after(loaded: &anima_scene::LoadedFlex3d, steps: usize) -> Vec<anima_geom::DVec3> {
+    let mut world = Flex3dWorld::new(&loaded.scene, loaded.meshes()).unwrap();
     world.run_to_step(steps).unwrap();
     world.positions().to_vec()
 }
@@ -18,7 +18,7 @@ fn par_and_its_ron_conversion_run_identically() {
     for scene in ThesisScene::ALL {
         let par = scene.load().unwrap();
         let ron_path = flex3d_assets().join(format!("{}.ron", scene.slug()));
-        let ron = anima_scene::load(&ron_path, &LoadOptions::default()).unwrap();
+        let ron = anima_scene::load_flex3d(&ron_path, &LoadOptions::default()).unwrap();
         assert_eq!(par.scene, ron.scene, "{}: the committed RON must say what the script says", scene.slug());
         assert_eq!(positions_after(&par, 500), positions_after(&ron, 500), "{}", scene.slug());
     }
@@ -80,20 +80,12 @@ fn run_writes_frames_pictures_and_summary() {
     let dir = std::env::temp_dir().join(format!("anima-run-test-{}", std::process::id()));
     let mut loaded = ThesisScene::Tablecloth.load().unwrap();
     loaded.scene.duration_s = 1.0;
-    let opts = RunOptions {
-        out_dir: Some(dir.clone()),
-        write_frames: true,
-        frame0: true,
-        pictures: true,
-        progress: false,
-        warn_stability: false,
-        linear_solver: None,
-    };
-    let outcome = run(&loaded, &opts, |_, _| {}).unwrap();
-    let s = &outcome.summary;
+    let opts = RunOptions { frame0: true, ..RunOptions::writing_to(&dir) };
+    let (s, world) = run(&loaded, "tablecloth", &opts, &mut Silent).unwrap();
     assert_eq!((s.steps, s.frames), (1000, 2));
-    assert!(s.all_finite && s.non_finite.is_none());
-    assert_eq!(s.penetrations, 0);
+    let Detail::Flex3d(d) = &s.detail else { panic!("a FLEX3D summary") };
+    assert!(s.all_finite && d.non_finite.is_none());
+    assert_eq!(d.penetrations, 0);
     for name in ["toalha_0.OBT", "toalha_1.OBT", "toalha_2.OBT", "toalha_2.obj", "final.png", "frames.png"] {
         assert!(dir.join(name).is_file(), "{name} missing");
     }
@@ -101,7 +93,7 @@ fn run_writes_frames_pictures_and_summary() {
         anima_geom::obt::read_obt(std::fs::File::open(dir.join("toalha_2.OBT")).unwrap(), Default::default())
             .unwrap();
     assert_eq!((obt.vertices.len(), obt.faces.len()), (400, 2 * 19 * 19));
-    for (a, b) in obt.vertices.iter().zip(outcome.world.positions()) {
+    for (a, b) in obt.vertices.iter().zip(world.positions()) {
         assert!((*a - *b).abs().max_element() <= 5e-7, "frame file must hold the final state to 6 decimals");
     }
     std::fs::remove_dir_all(&dir).unwrap();

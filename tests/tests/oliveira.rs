@@ -11,7 +11,8 @@ use anima_cloth::oliveira::{
 };
 use anima_geom::{DVec2, DVec3, DiagonalPattern};
 use anima_ode::Integrator;
-use anima_scene::oliveira::{LoadedOliveiraScene, OliveiraSceneError, load};
+use anima_scene::oliveira::LoadedOliveira;
+use anima_scene::{SceneError, load_oliveira};
 
 fn assets() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/oliveira")
@@ -19,9 +20,9 @@ fn assets() -> PathBuf {
 
 const SCENES: [&str; 3] = ["test-1-bunny", "test-2-table", "test-3-sphere"];
 
-fn scene(name: &str, n: usize) -> LoadedOliveiraScene {
+fn scene(name: &str, n: usize) -> LoadedOliveira {
     let path = assets().join(format!("{name}-{n}x{n}.ron"));
-    load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    load_oliveira(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// Runs `cloth` until `t_end`, checking every `check_every` steps (and at the end) that no particle is
@@ -258,35 +259,35 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
 
     // A misspelt field: the error names the file, the line and what was expected.
     let p = write("misspelt.ron", &good.replace("restitution:", "restitutoin:"));
-    let e = load(&p).unwrap_err().to_string();
+    let e = load_oliveira(&p).unwrap_err().to_string();
     assert!(e.contains("misspelt.ron:") && e.contains("`restitution`") && e.contains("restitutoin"), "{e}");
 
     // Broken syntax.
     let p = write("syntax.ron", &good.replace("size_m: 1.0,", "size_m: 1.0.0,"));
-    let e = load(&p).unwrap_err();
-    assert!(matches!(e, OliveiraSceneError::Parse(ref pe) if pe.line > 1), "{e}");
+    let e = load_oliveira(&p).unwrap_err();
+    assert!(matches!(e, SceneError::Parse(ref pe) if pe.line > 1), "{e}");
 
     // A mesh file that is not there.
     let p = write("missing.ron", &good.replace("../meshes/bunny.obj", "nowhere.obj"));
-    let e = load(&p).unwrap_err().to_string();
+    let e = load_oliveira(&p).unwrap_err().to_string();
     assert!(e.contains("nowhere.obj"), "{e}");
 
     // An OBJ whose face names a vertex that does not exist: file, line and column.
     write("bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 9\n");
     let p = write("bad-index.ron", &good.replace("../meshes/bunny.obj", "bad-index.obj"));
-    let e = load(&p).unwrap_err();
-    assert!(matches!(e, OliveiraSceneError::Mesh { .. }), "{e}");
+    let e = load_oliveira(&p).unwrap_err();
+    assert!(matches!(e, SceneError::Obj { .. }), "{e}");
     assert!(e.to_string().contains("bad-index.obj:6:7: vertex index 9 is out of range"), "{e}");
 
     // An open mesh loads but cannot be a solid: building says which object and why.
     write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\n");
     let p = write("open.ron", &good.replace("../meshes/bunny.obj", "open.obj"));
-    let e = load(&p).unwrap().build().unwrap_err();
+    let e = load_oliveira(&p).unwrap().build().unwrap_err();
     assert!(matches!(e, BuildError::Object { ref name, .. } if name == "bunny"), "{e}");
     assert!(e.to_string().contains("not closed"), "{e}");
 
     // Values out of range are build errors naming the field.
-    let mut s = load(&assets().join("test-3-sphere-5x5.ron")).unwrap().scene;
+    let mut s = load_oliveira(&assets().join("test-3-sphere-5x5.ron")).unwrap().scene;
     s.cloth.vertices_per_side = 1;
     assert!(matches!(OliveiraCloth::new(&s, vec![]), Err(BuildError::Mesh(_))));
     s.cloth.vertices_per_side = 5;
@@ -299,7 +300,7 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
     s.cloth.height = Height::At { z_m: 0.25 };
     assert!(matches!(OliveiraCloth::new(&s, vec![]), Err(BuildError::StartsInside { .. })));
     // The scene names one mesh; none given.
-    let bunny = load(&assets().join("test-1-bunny-5x5.ron")).unwrap().scene;
+    let bunny = load_oliveira(&assets().join("test-1-bunny-5x5.ron")).unwrap().scene;
     assert!(matches!(
         OliveiraCloth::new(&bunny, vec![]),
         Err(BuildError::MeshCount { expected: 1, given: 0 })

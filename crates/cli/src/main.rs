@@ -1,17 +1,23 @@
-//! `anima`: run, convert and render scenes.
+//! `anima`: run any scene, optimise a controller, convert a FLEX3D script.
+
+mod progress;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
 use anima_geom::DVec3;
-use anima_lab::run::flex3d::{RunOptions, run, write_summary};
-use anima_ode::Integrator;
-use anima_scene::{LoadOptions, LoadedScene};
-use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand};
+use anima_lab::optimise::{OptimiseOptions, optimise};
+use anima_lab::run::{Detail, Flex3dSwitches, Overrides, RunOptions, Summary, write_summary};
+use anima_ode::{Integrator, LinearSolver};
+use anima_scene::{LoadOptions, LoadedFlex3d, Scene};
+use anyhow::{Context, Result};
+use clap::builder::PossibleValue;
+use clap::{Parser, Subcommand, ValueEnum};
 
-/// Physically based animation: FLEX3D surfaces and beyond.
+use crate::progress::Bar;
+
+/// Physically based animation: FLEX3D surfaces, Oliveira cloth, articulated characters.
 #[derive(Debug, Parser)]
 #[command(name = "anima", version, about)]
 struct Cli {
@@ -21,11 +27,17 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Simulate a scene (.par, .ron or a body scene .ron) and write its frames, pictures and a JSON summary.
+    /// Simulate a scene and write its frames, pictures and a JSON summary.
     ///
-    /// Without a scene file, runs the built-in default: the FLEX3D tablecloth falling on a table
-    /// (Nedel 1993, Fig. A2.8).
+    /// Every kind of scene runs: a FLEX3D script (.par) or scene (Flex3dScene), a spring-network sheet
+    /// (SheetScene), an Oliveira drape (OliveiraScene, AdaptiveOliveiraScene), figures holding poses
+    /// (BodyScene) and figures driven by a controller (CharacterScene). Without a scene file, runs the
+    /// built-in default: the FLEX3D tablecloth falling on a table (Nedel 1993, Fig. A2.8).
     Run(RunArgs),
+    /// Optimise a controller from a spec (Optimisation): its objective over its free parameters, with
+    /// its optimiser and seed. The log is written after every generation and an interrupted run resumes
+    /// from it; the best controller is written as RON.
+    Optimise(OptimiseArgs),
     /// Convert a FLEX3D .PAR script to the equivalent anima RON scene.
     Convert {
         /// The .PAR script.
@@ -39,6 +51,83 @@ enum Command {
     },
 }
 
+/// A time-stepping method (see `anima_ode::Integrator`).
+#[derive(Debug, Clone, Copy)]
+struct IntegratorArg(Integrator);
+
+impl ValueEnum for IntegratorArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        const ALL: [IntegratorArg; Integrator::ALL.len()] = {
+            let mut out = [IntegratorArg(Integrator::ForwardEuler); Integrator::ALL.len()];
+            let mut k = 0;
+            while k < out.len() {
+                out[k] = IntegratorArg(Integrator::ALL[k]);
+                k += 1;
+            }
+            out
+        };
+        &ALL
+    }
+
+    fn to_possible_value(&self) -> Option<PossibleValue> {
+        Some(PossibleValue::new(self.0.name()).help(integrator_help(self.0)))
+    }
+}
+
+/// One line of meaning per integrator for `--help`.
+fn integrator_help(i: Integrator) -> &'static str {
+    match i {
+        Integrator::ForwardEuler => {
+            "forward Euler as FLEX3D ran it (position from the old velocity; Table 4.1)"
+        }
+        Integrator::SymplecticEuler => "semi-implicit Euler: velocity first, then position (first order)",
+        Integrator::Midpoint => "explicit midpoint, second-order Runge–Kutta",
+        Integrator::Rk4 => "classical fourth-order Runge–Kutta",
+        Integrator::DormandPrince => "Dormand–Prince 5(4) with error-controlled steps",
+        Integrator::AdamsBashforth4 => "Adams–Bashforth 4, started by RK4",
+        Integrator::AdamsBashforthMoulton4 => "Adams–Bashforth–Moulton 4 predictor–corrector",
+        Integrator::AdaptiveEuler => "forward Euler with the thesis's adaptive step rule",
+        Integrator::ImplicitEuler => "backward Euler (Baraff–Witkin): stable at any step, damps motion",
+        Integrator::Bdf2 => "second-order backward differentiation: stable, less damping than backward Euler",
+    }
+}
+
+/// The linear solver of the implicit integrators.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SolverArg {
+    /// Conjugate gradients, block-Jacobi preconditioned: cheap per iteration.
+    Cg,
+    /// faer's sparse Cholesky: exact whatever the stiffness.
+    Cholesky,
+}
+
+/// FLEX3D's friction reading (spec S7.2).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum FrictionArg {
+    /// A fraction of the resultant force, against the motion (the thesis's text).
+    Literal,
+    /// −μv, proportional to the velocity.
+    Viscous,
+}
+
+/// FLEX3D's particle–surface contact partner (spec S7.2).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ContactArg {
+    /// The nearest vertex of the hit triangle.
+    Nearest,
+    /// The triangle's three vertices.
+    Three,
+}
+
+/// FLEX3D's response against static objects (spec S7.2).
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum StaticResponseArg {
+    /// v ← −v.
+    Reverse,
+    /// Reflect the normal component only.
+    Reflect,
+}
+
 #[derive(Debug, clap::Args)]
 struct RunArgs {
     /// Scene file (.par or .ron); omit for the built-in tablecloth.
@@ -46,63 +135,83 @@ struct RunArgs {
     /// Output folder for frames, pictures and the summary.
     #[arg(long, default_value = "out")]
     out: PathBuf,
-    /// Integrator: forward-euler (FLEX3D's), symplectic-euler, midpoint, rk4, dopri5, ab4, abm4,
-    /// adaptive-euler, implicit-euler or bdf2.
-    #[arg(long)]
-    integrator: Option<Integrator>,
-    /// Linear solver of implicit-euler and bdf2: cg (conjugate gradients, the default) or cholesky
-    /// (faer's sparse Cholesky; exact whatever the stiffness).
-    #[arg(long)]
-    linear_solver: Option<anima_ode::LinearSolver>,
-    /// Time step in seconds (overrides DELTA_t).
+    /// Time-stepping method (FLEX3D, sheet and Oliveira scenes).
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Linear solver of the implicit integrators.
+    #[arg(long, value_enum)]
+    linear_solver: Option<SolverArg>,
+    /// Time step in seconds (overrides the scene's: DELTA_t, dt_s, a drape's step rule, a figure's
+    /// control step).
     #[arg(long)]
     dt: Option<f64>,
-    /// Simulated duration in seconds (overrides DURAÇÃO).
+    /// Simulated duration in seconds (overrides the scene's).
     #[arg(long)]
     duration: Option<f64>,
     /// Where to write the JSON summary (default: OUT/summary.json).
     #[arg(long)]
     summary: Option<PathBuf>,
-    /// Gravity: on (0, −9.8, 0), off, or gx,gy,gz. A .PAR script without GRAVIDADE defaults to on.
+    /// Gravity (FLEX3D and Oliveira scenes): on (0, −9.8, 0), off, or gx,gy,gz. A .PAR script without
+    /// GRAVIDADE defaults to on.
     #[arg(long, value_parser = parse_gravity)]
     gravity: Option<DVec3>,
-    /// Friction reading: literal (fraction of the resultant, against the motion) or viscous (−μv).
-    #[arg(long)]
-    friction: Option<String>,
-    /// Particle–surface contact partner: nearest (vertex) or three (vertices).
-    #[arg(long)]
-    contact: Option<String>,
-    /// Response against static objects: reverse (v ← −v) or reflect (normal component only).
-    #[arg(long)]
-    static_response: Option<String>,
-    /// Read FORÇA_EXTERNA as an acceleration (multiplied by the particle mass).
+    /// FLEX3D: the friction reading.
+    #[arg(long, value_enum)]
+    friction: Option<FrictionArg>,
+    /// FLEX3D: the particle–surface contact partner.
+    #[arg(long, value_enum)]
+    contact: Option<ContactArg>,
+    /// FLEX3D: the response against static objects.
+    #[arg(long, value_enum)]
+    static_response: Option<StaticResponseArg>,
+    /// FLEX3D: read FORÇA_EXTERNA as an acceleration (multiplied by the particle mass).
     #[arg(long)]
     external_is_acceleration: bool,
-    /// Apply −F/2 of each angular spring to its two outer particles (momentum-conserving bending).
+    /// FLEX3D: apply −F/2 of each angular spring to its two outer particles (momentum-conserving
+    /// bending).
     #[arg(long)]
     bend_reaction: bool,
-    /// Limit friction so it cannot reverse a velocity within one step (needed at large steps).
+    /// FLEX3D: limit friction so it cannot reverse a velocity within one step (needed at large steps).
     #[arg(long)]
     friction_clamp: bool,
-    /// Switch particle–triangle collisions off (an extension; FLEX3D always ran them).
+    /// FLEX3D: switch particle–triangle collisions off (an extension; FLEX3D always ran them).
     #[arg(long)]
     no_collisions: bool,
     /// Also write the initial state as frame 0.
     #[arg(long)]
     frame0: bool,
-    /// Do not write per-frame .OBT/.obj files.
+    /// Do not write per-frame files.
     #[arg(long)]
     no_frames: bool,
     /// Do not render pictures.
     #[arg(long)]
     no_pictures: bool,
-    /// No progress bar.
+    /// No progress bar and no report on standard error.
     #[arg(long, short)]
     quiet: bool,
     /// Sheet scenes: an OBJ of reference positions (such as another run's final.obj); the summary then
     /// reports the RMS distance to it.
     #[arg(long)]
     reference: Option<PathBuf>,
+}
+
+#[derive(Debug, clap::Args)]
+struct OptimiseArgs {
+    /// The optimisation spec (`Optimisation(…)`, e.g. assets/optimisations/walk.ron).
+    spec: PathBuf,
+    /// Output folder: `<name>.log.ron` after every generation, `<name>.ron` (the best controller) at
+    /// the end.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Evaluations in all (overrides the spec's).
+    #[arg(long)]
+    evaluations: Option<usize>,
+    /// Start over, ignoring an earlier log in the output folder.
+    #[arg(long)]
+    fresh: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 fn parse_gravity(s: &str) -> Result<DVec3, String> {
@@ -116,8 +225,8 @@ fn parse_gravity(s: &str) -> Result<DVec3, String> {
                 .collect::<Result<_, _>>()
                 .map_err(|e| format!("expected on, off or gx,gy,gz: {e}"))?;
             match parts[..] {
-                [x, y, z] => Ok(DVec3::new(x, y, z)),
-                _ => Err(format!("expected on, off or three comma-separated numbers, found `{s}`")),
+                [x, y, z] if [x, y, z].iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
+                _ => Err(format!("expected on, off or three finite comma-separated numbers, found `{s}`")),
             }
         }
     }
@@ -127,194 +236,93 @@ fn parse_gravity(s: &str) -> Result<DVec3, String> {
 const DEFAULT_SCENE: &str = include_str!("../../../assets/flex3d/tablecloth.ron");
 const DEFAULT_TABLE: &str = include_str!("../../../assets/flex3d/mesa.obt");
 
-fn load_default() -> Result<LoadedScene> {
-    let scene = anima_scene::ron_scene::from_ron_str(DEFAULT_SCENE).context("the built-in scene")?;
+fn load_default() -> Result<Scene> {
+    let scene = anima_scene::flex3d::from_ron_str(DEFAULT_SCENE).context("the built-in scene")?;
     let table = anima_geom::obt::read_obt(DEFAULT_TABLE.as_bytes(), anima_geom::obt::IndexBase::Auto)
         .context("the built-in table")?
         .to_mesh()?;
-    Ok(LoadedScene {
-        scene,
-        objects: vec![("mesa.obt".into(), table)],
-        path: PathBuf::from("built-in tablecloth"),
-    })
+    Ok(Scene::Flex3d(LoadedFlex3d { scene, objects: vec![("mesa.obt".into(), table)] }))
 }
 
-/// The struct name a RON scene file starts with (after comments), which says what kind of scene it is.
-fn ron_struct_name(src: &str) -> Option<&str> {
-    let mut rest = src;
-    loop {
-        rest = rest.trim_start();
-        if let Some(r) = rest.strip_prefix("//") {
-            rest = r.split_once('\n').map_or("", |(_, after)| after);
-        } else if rest.starts_with("#![") {
-            rest = rest.split_once('\n').map_or("", |(_, after)| after);
-        } else {
-            break;
+impl RunArgs {
+    fn overrides(&self) -> Overrides {
+        Overrides {
+            integrator: self.integrator.map(|i| i.0),
+            dt: self.dt,
+            duration: self.duration,
+            // A .PAR script takes gravity when it is read (its GRAVIDADE default is "on").
+            gravity: self.gravity,
+            flex3d: Flex3dSwitches {
+                friction: self.friction.map(|f| match f {
+                    FrictionArg::Literal => FrictionMode::Literal,
+                    FrictionArg::Viscous => FrictionMode::Viscous,
+                }),
+                contact: self.contact.map(|c| match c {
+                    ContactArg::Nearest => ContactApproach::NearestVertex,
+                    ContactArg::Three => ContactApproach::ThreeVertices,
+                }),
+                static_response: self.static_response.map(|r| match r {
+                    StaticResponseArg::Reverse => StaticResponse::Reverse,
+                    StaticResponseArg::Reflect => StaticResponse::ReflectNormal,
+                }),
+                external_is_acceleration: self.external_is_acceleration,
+                bend_reaction: self.bend_reaction,
+                friction_clamp: self.friction_clamp,
+                no_collisions: self.no_collisions,
+            },
         }
     }
-    let end = rest.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(rest.len());
-    (end > 0).then(|| &rest[..end])
-}
 
-fn run_sheet_command(args: &RunArgs, path: &Path, src: &str) -> Result<ExitCode> {
-    let mut scene =
-        anima_scene::sheet::from_ron_str(src).map_err(|e| e.with_file(path.display().to_string()))?;
-    if let Some(i) = args.integrator {
-        scene.integrator = i;
+    fn options(&self) -> Result<RunOptions> {
+        let reference = match &self.reference {
+            Some(p) => {
+                let bytes = std::fs::read(p).with_context(|| format!("reading {}", p.display()))?;
+                let mesh =
+                    anima_geom::read_obj(&bytes[..]).with_context(|| format!("reading {}", p.display()))?;
+                Some(mesh.vertices().to_vec())
+            }
+            None => None,
+        };
+        Ok(RunOptions {
+            out_dir: Some(self.out.clone()),
+            frames: !self.no_frames,
+            frame0: self.frame0,
+            pictures: !self.no_pictures,
+            linear_solver: self.linear_solver.map(|s| match s {
+                SolverArg::Cg => LinearSolver::default_cg(),
+                SolverArg::Cholesky => LinearSolver::SparseCholesky,
+            }),
+            reference,
+        })
     }
-    if let Some(dt) = args.dt {
-        scene.dt_s = dt;
-    }
-    if let Some(d) = args.duration {
-        scene.duration_s = d;
-    }
-    let opts = anima_lab::run::sheet::SheetRunOptions {
-        out_dir: Some(args.out.clone()),
-        reference: args.reference.clone(),
-        write_frames: !args.no_frames,
-        pictures: !args.no_pictures,
-        progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        warn_stability: !args.quiet,
-        linear_solver: args.linear_solver,
-    };
-    if !args.quiet {
-        eprintln!(
-            "anima: {} — {} particles, {} s at {} s ({})",
-            path.display(),
-            scene.sheet.n * scene.sheet.n,
-            scene.duration_s,
-            scene.dt_s,
-            scene.integrator
-        );
-    }
-    let s = anima_lab::run::sheet::run_sheet(&scene, &path.display().to_string(), &opts)?;
-    let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
-    anima_lab::output::write_atomic(&summary_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &s)?;
-        Ok(w.write_all(b"\n")?)
-    })?;
-    if !args.quiet {
-        let c = s.center_of_mass;
-        eprintln!(
-            "anima: {} steps in {:.2} s ({:.1} ns per particle-step); centre of mass ({:.4}, {:.4}, {:.4}) m, max strain {:.4}",
-            s.steps, s.wall_seconds, s.ns_per_particle_step, c[0], c[1], c[2], s.max_strain
-        );
-        if let Some(r) = s.rms_to_reference {
-            eprintln!("anima: RMS distance to the reference {r:.3e} m");
-        }
-    }
-    if let Some(e) = &s.error {
-        eprintln!("anima: error: the run stopped early: {e}");
-        return Ok(ExitCode::from(2));
-    }
-    Ok(ExitCode::SUCCESS)
 }
 
 fn run_command(args: RunArgs) -> Result<ExitCode> {
-    // A RON file whose top-level value is `BodyScene(…)` is an articulated-figure scene.
-    if let Some(path) = args.scene.as_deref().filter(|p| anima_lab::run::body::is_body_scene_file(p)) {
-        let progress = !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let opts = anima_lab::run::body::BodyRunOptions {
-            out_dir: Some(args.out.clone()),
-            pictures: !args.no_pictures,
-            dt: args.dt,
-            duration: args.duration,
-            progress,
-        };
-        return anima_lab::run::body::run_command(path, &args.out, args.summary.as_deref(), opts, args.quiet);
-    }
-    if let Some(path) =
-        args.scene.as_ref().filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")))
-    {
-        let src = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        if ron_struct_name(&src) == Some("SheetScene") {
-            return run_sheet_command(&args, path, &src);
+    let (mut scene, label) = match &args.scene {
+        Some(path) => {
+            (anima_scene::load(path, &LoadOptions { gravity: args.gravity })?, path.display().to_string())
         }
-    }
-    let mut loaded = match &args.scene {
-        Some(path) => anima_scene::load(path, &LoadOptions { gravity: args.gravity })?,
-        None => load_default()?,
+        None => (load_default()?, "built-in tablecloth".to_owned()),
     };
-    let scene = &mut loaded.scene;
-    if args.scene.is_none()
-        && let Some(g) = args.gravity
-    {
-        scene.gravity_m_s2 = g;
+    args.overrides().apply(&mut scene)?;
+    let opts = args.options()?;
+    if opts.reference.is_some() && !matches!(scene, Scene::Sheet(_)) {
+        anyhow::bail!("--reference applies to sheet scenes only");
     }
-    if let Some(i) = args.integrator {
-        scene.integrator = i;
-    }
-    if let Some(dt) = args.dt {
-        if !(dt > 0.0 && dt.is_finite()) {
-            bail!("--dt must be a positive number of seconds, found {dt}");
-        }
-        scene.dt_s = dt;
-    }
-    if let Some(d) = args.duration {
-        if !(d > 0.0 && d.is_finite()) {
-            bail!("--duration must be a positive number of seconds, found {d}");
-        }
-        scene.duration_s = d;
-    }
-    if let Some(f) = &args.friction {
-        scene.friction.mode = match f.as_str() {
-            "literal" => FrictionMode::Literal,
-            "viscous" => FrictionMode::Viscous,
-            _ => bail!("--friction: expected literal or viscous, found `{f}`"),
-        };
-    }
-    if let Some(c) = &args.contact {
-        scene.options.contact = match c.as_str() {
-            "nearest" | "nearest-vertex" => ContactApproach::NearestVertex,
-            "three" | "three-vertices" => ContactApproach::ThreeVertices,
-            _ => bail!("--contact: expected nearest or three, found `{c}`"),
-        };
-    }
-    if let Some(r) = &args.static_response {
-        scene.options.static_response = match r.as_str() {
-            "reverse" => StaticResponse::Reverse,
-            "reflect" | "reflect-normal" => StaticResponse::ReflectNormal,
-            _ => bail!("--static-response: expected reverse or reflect, found `{r}`"),
-        };
-    }
-    scene.options.external_force_is_acceleration |= args.external_is_acceleration;
-    scene.options.bend_reaction |= args.bend_reaction;
-    scene.options.friction_clamp |= args.friction_clamp;
-    if args.no_collisions {
-        scene.options.collisions = false;
-    }
-    let opts = RunOptions {
-        out_dir: Some(args.out.clone()),
-        write_frames: !args.no_frames,
-        frame0: args.frame0,
-        pictures: !args.no_pictures,
-        progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        warn_stability: !args.quiet,
-        linear_solver: args.linear_solver,
-    };
-    let n_frames = loaded.scene.n_frames();
     if !args.quiet {
-        eprintln!(
-            "anima: {} — {} steps of {} s ({}), {} frames",
-            loaded.path.display(),
-            loaded.scene.n_steps(),
-            loaded.scene.dt_s,
-            loaded.scene.integrator,
-            n_frames
-        );
+        eprintln!("anima: {label} — {}", describe(&scene));
     }
-    let outcome = run(&loaded, &opts, |_, _| {})?;
+    let mut bar = Bar::new(!args.quiet);
+    let summary = anima_lab::run::run(&scene, &label, &opts, &mut bar)?;
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
-    write_summary(&summary_path, &outcome.summary)?;
-    let s = &outcome.summary;
+    write_summary(&summary_path, &summary)?;
     if !args.quiet {
-        eprintln!(
-            "anima: {} steps in {:.2} s ({:.0} ns per particle-step); max speed {:.4}, penetrations {}",
-            s.steps, s.wall_seconds, s.ns_per_particle_step, s.max_speed, s.penetrations
-        );
+        report(&summary);
         eprintln!("anima: wrote {} and {}", args.out.display(), summary_path.display());
     }
-    if let Some(nf) = &s.non_finite {
+    if let Detail::Flex3d(d) = &summary.detail
+        && let Some(nf) = &d.non_finite
+    {
         eprintln!(
             "anima: error: the state went non-finite at step {} (t = {} s), surface `{}`, particle ({}, {}); \
              try a smaller --dt or another --integrator",
@@ -322,9 +330,128 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         );
         return Ok(ExitCode::from(2));
     }
-    if let Some(e) = &s.error {
+    if let Some(e) = &summary.error {
         eprintln!("anima: error: the run stopped early: {e}");
+        if !summary.all_finite {
+            eprintln!("anima: try a smaller --dt or another --integrator");
+        }
         return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One line on what is about to run.
+fn describe(scene: &Scene) -> String {
+    match scene {
+        Scene::Flex3d(l) => format!(
+            "FLEX3D, {} steps of {} s ({}), {} frames",
+            l.scene.n_steps(),
+            l.scene.dt_s,
+            l.scene.integrator,
+            l.scene.n_frames()
+        ),
+        Scene::Sheet(s) => format!(
+            "sheet of {} particles, {} s at {} s ({})",
+            s.sheet.n * s.sheet.n,
+            s.duration_s,
+            s.dt_s,
+            s.integrator
+        ),
+        Scene::Oliveira(l) => format!(
+            "Oliveira drape, {} s ({}, {:?}){}",
+            l.scene.duration_s,
+            l.scene.integrator,
+            l.scene.time_step,
+            l.remesher.map(|r| format!(", remeshed: {r:?}")).unwrap_or_default()
+        ),
+        Scene::Body(l) => format!(
+            "figures `{}`: {} models, {} steps of {} s",
+            l.scene.name,
+            l.scene.models.len(),
+            l.scene.n_steps(),
+            l.scene.world.dt
+        ),
+        Scene::Character(l) => format!(
+            "character `{}`: {} models driven by `{}`, {} steps of {} s",
+            l.scene.name,
+            l.scene.models.len(),
+            l.controller.name(),
+            l.scene.n_steps(),
+            l.scene.world.dt
+        ),
+    }
+}
+
+/// The summary's main numbers on standard error.
+fn report(s: &Summary) {
+    eprintln!("anima: {} steps, {} frames in {:.2} s", s.steps, s.frames, s.wall_seconds);
+    match &s.detail {
+        Detail::Flex3d(d) => eprintln!(
+            "anima: {:.0} ns per particle-step; max speed {:.4}, penetrations {}",
+            d.ns_per_particle_step, d.max_speed, d.penetrations
+        ),
+        Detail::Sheet(d) => {
+            let c = d.center_of_mass;
+            eprintln!(
+                "anima: {:.1} ns per particle-step; centre of mass ({:.4}, {:.4}, {:.4}) m, max strain {:.4}",
+                d.ns_per_particle_step, c[0], c[1], c[2], d.max_strain
+            );
+            if let Some(r) = d.rms_to_reference {
+                eprintln!("anima: RMS distance to the reference {r:.3e} m");
+            }
+        }
+        Detail::Oliveira(d) => eprintln!(
+            "anima: {} → {} particles, {} faces; Δt {:.2e}…{:.2e} s; {} particles inside an object at the end",
+            d.particles_at_start, d.particles, d.faces, d.min_dt, d.max_dt, d.penetrations
+        ),
+        Detail::Body(d) => {
+            for m in &d.models {
+                eprintln!(
+                    "anima: {} ({}, G = {}): head lowest {:.3} m, centre of mass moved {:.3} m; hip {:.4} m (from {:.4})",
+                    m.name,
+                    m.pd_mode,
+                    m.gain_scale,
+                    m.min_head_height,
+                    m.max_com_drift,
+                    m.hip_height_m,
+                    m.initial_hip_height_m
+                );
+            }
+            if let Some(e) = &d.evaluation {
+                eprintln!("anima: evaluation: {e:?}");
+            }
+        }
+    }
+}
+
+fn optimise_command(args: OptimiseArgs) -> Result<ExitCode> {
+    let loaded = anima_scene::load_optimisation(&args.spec)?;
+    let opts =
+        OptimiseOptions { out_dir: args.out.clone(), evaluations: args.evaluations, fresh: args.fresh };
+    if !args.quiet {
+        eprintln!(
+            "anima: {} — optimising `{}` ({:?}), {} evaluations, seed {}",
+            args.spec.display(),
+            loaded.controller.name(),
+            loaded.spec.objective,
+            opts.evaluations.unwrap_or(loaded.spec.evaluations),
+            loaded.spec.seed
+        );
+    }
+    let mut bar = Bar::new(!args.quiet);
+    let out = optimise(&loaded, &opts, &mut bar)?;
+    if !args.quiet {
+        if out.resumed > 0 {
+            eprintln!("anima: resumed after {} logged evaluations", out.resumed);
+        }
+        eprintln!(
+            "anima: best fitness {:.4} (start {:.4}) after {} evaluations at {:?}",
+            out.best_fitness,
+            out.start_fitness,
+            out.log.len(),
+            out.best_x
+        );
+        eprintln!("anima: wrote {} and {}", out.controller_path.display(), out.log_path.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -343,6 +470,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run_command(args),
+        Command::Optimise(args) => optimise_command(args),
         Command::Convert { input, output, gravity } => {
             convert_command(&input, output, gravity).map(|()| ExitCode::SUCCESS)
         }

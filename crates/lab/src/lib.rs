@@ -5,6 +5,7 @@ pub mod figures;
 pub mod flex3d;
 pub mod nunes;
 pub mod oliveira;
+pub mod optimise;
 pub mod output;
 pub mod picture;
 pub mod repo;

@@ -79,21 +79,27 @@ pub fn write_pictures(dir: &Path, world: &Flex3dWorld, snapshots: &[Snapshot]) -
     let camera = camera_for(bounds);
     let last =
         labelled_frame(world, world.positions(), &camera, (960, 720), &format!("t = {:.2} s", world.time()))?;
+    let tiles = snapshots
+        .iter()
+        .map(|s| {
+            labelled_frame(
+                world,
+                &s.positions,
+                &camera,
+                (400, 300),
+                &format!("frame {} (t = {:.1} s)", s.frame, s.time),
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    write_final_and_sheet(dir, &last, &tiles, 3)
+}
+
+/// Writes `final.png` and, when there are tiles, `frames.png`: the tiles on a sheet `columns` wide.
+/// Every kind of run leaves its pictures in this form.
+pub fn write_final_and_sheet(dir: &Path, last: &Image, tiles: &[Image], columns: usize) -> Result<()> {
     write_atomic(&dir.join("final.png"), |w| Ok(last.write_png(w)?))?;
-    if !snapshots.is_empty() {
-        let tiles = snapshots
-            .iter()
-            .map(|s| {
-                labelled_frame(
-                    world,
-                    &s.positions,
-                    &camera,
-                    (400, 300),
-                    &format!("frame {} (t = {:.1} s)", s.frame, s.time),
-                )
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let sheet = Image::grid(&tiles, 3, 4, [255, 255, 255])?;
+    if !tiles.is_empty() {
+        let sheet = Image::grid(tiles, columns, 4, [255, 255, 255])?;
         write_atomic(&dir.join("frames.png"), |w| Ok(sheet.write_png(w)?))?;
     }
     Ok(())

@@ -1,117 +1,390 @@
-//! Loading a scene file and the objects it names.
+//! Loading a scene file of any kind, once, with every part it names.
 
 use std::fs;
-use std::io;
 use std::path::{Path, PathBuf};
 
-use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dScene};
-use anima_geom::obt::{IndexBase, ObtError, read_obt};
-use anima_geom::{DVec3, MeshError, TriangleMesh};
+use anima_body::{BodyScene, Skeleton, SkeletonSource};
+use anima_cloth::flex3d::FLEX3D_GRAVITY;
+use anima_cloth::oliveira::{OliveiraScene, ShapeDesc};
+use anima_control::Controller;
+use anima_format::ron_text::struct_name;
+use anima_format::{FieldError, utf8};
+use anima_geom::obt::{IndexBase, read_obt};
+use anima_geom::{DVec3, TriangleMesh, read_obj};
 
-use anima_format::utf8;
-
-use crate::{ParseError, par, ron_scene};
+use crate::body::LoadedBody;
+use crate::character::{CharacterScene, LoadedCharacter};
+use crate::flex3d::LoadedFlex3d;
+use crate::oliveira::LoadedOliveira;
+use crate::optimisation::{LoadedOptimisation, OptimisationSpec};
+use crate::sheet::SheetScene;
+use crate::{SceneError, par};
 
 /// Choices the caller makes over the file.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LoadOptions {
-    /// Gravity for the run, m/s². When given it replaces whatever the file says (a `.PAR` script's
+    /// Gravity for a FLEX3D run, m/s². When given it replaces whatever the file says (a `.PAR` script's
     /// `GRAVIDADE`, a RON scene's `gravity_m_s2`): spec S3.1 lets the command line override the keyword.
     /// When `None`, a `.PAR` script without `GRAVIDADE` gets [`FLEX3D_GRAVITY`], "on" (spec S3.1).
     pub gravity: Option<DVec3>,
 }
 
-/// A scene with its static objects loaded.
+/// The kinds of scene file anima reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneKind {
+    /// A FLEX3D surface scene: a `.PAR` script or `Flex3dScene(…)`.
+    Flex3d,
+    /// A spring-network sheet, `SheetScene(…)` (the standard benchmark sheets).
+    Sheet,
+    /// An Oliveira 2013 drape, `OliveiraScene(…)` or, remeshed, `AdaptiveOliveiraScene(…)`.
+    Oliveira,
+    /// Articulated figures holding poses, `BodyScene(…)`.
+    Body,
+    /// Articulated figures driven by a controller, `CharacterScene(…)`.
+    Character,
+}
+
+impl SceneKind {
+    /// The kind's name as the `anima` command and its summaries print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SceneKind::Flex3d => "FLEX3D",
+            SceneKind::Sheet => "sheet",
+            SceneKind::Oliveira => "Oliveira drape",
+            SceneKind::Body => "body",
+            SceneKind::Character => "character",
+        }
+    }
+}
+
+/// A scene file and every part it names, read and checked.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LoadedScene {
-    pub scene: Flex3dScene,
-    /// One mesh per name in `scene.objects`, in that order, paired with the name as the scene wrote it.
-    pub objects: Vec<(String, TriangleMesh)>,
-    /// The scene file, as given to [`load`]; output and object paths are relative to its folder.
-    pub path: PathBuf,
+#[expect(clippy::large_enum_variant, reason = "a scene is loaded once per run: its size costs nothing")]
+pub enum Scene {
+    Flex3d(LoadedFlex3d),
+    Sheet(SheetScene),
+    Oliveira(LoadedOliveira),
+    Body(LoadedBody),
+    Character(LoadedCharacter),
 }
 
-/// Why a scene could not be loaded. Every variant names the file at fault.
-#[derive(Debug, thiserror::Error)]
-pub enum SceneError {
-    #[error("could not read {}: {source}", path.display())]
-    Read {
-        path: PathBuf,
-        #[source]
-        source: io::Error,
-    },
-    /// A syntax or validation error; its `file` is set.
-    #[error(transparent)]
-    Parse(#[from] ParseError),
-    #[error("{}: expected a scene file ending in .par or .ron", path.display())]
-    UnknownExtension { path: PathBuf },
-    #[error("{}: object file `{name}` not found in {} (tried the exact name, then ignoring case)", scene.display(), folder.display())]
-    ObjectNotFound { scene: PathBuf, name: String, folder: PathBuf },
-    #[error("{}:{source}", path.display())]
-    Object {
-        path: PathBuf,
-        #[source]
-        source: ObtError,
-    },
-    #[error("{}: {source}", path.display())]
-    ObjectMesh {
-        path: PathBuf,
-        #[source]
-        source: MeshError,
-    },
-}
-
-/// Loads a `.par`/`.PAR` script or a `.ron` scene (by extension, any case) and every `.OBT` object it
-/// names, resolved relative to the scene file's folder.
-pub fn load(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let file_name = path.display().to_string();
-    let bytes = fs::read(path).map_err(|source| SceneError::Read { path: path.to_owned(), source })?;
-    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
-    let mut scene = match extension.as_str() {
-        "par" => par::parse(&bytes).map_err(|e| e.with_file(&file_name))?.to_scene(FLEX3D_GRAVITY),
-        "ron" => ron_scene::from_ron_str(utf8(&bytes).map_err(|e| e.with_file(&file_name))?)
-            .map_err(|e| e.with_file(&file_name))?,
-        _ => return Err(SceneError::UnknownExtension { path: path.to_owned() }),
-    };
-    if let Some(g) = opts.gravity {
-        scene.gravity_m_s2 = g;
+impl Scene {
+    pub fn kind(&self) -> SceneKind {
+        match self {
+            Scene::Flex3d(_) => SceneKind::Flex3d,
+            Scene::Sheet(_) => SceneKind::Sheet,
+            Scene::Oliveira(_) => SceneKind::Oliveira,
+            Scene::Body(_) => SceneKind::Body,
+            Scene::Character(_) => SceneKind::Character,
+        }
     }
 
-    let folder = match path.parent() {
+    /// The FLEX3D scene, or an error naming the kind `path` holds instead.
+    pub fn into_flex3d(self, path: &Path) -> Result<LoadedFlex3d, SceneError> {
+        match self {
+            Scene::Flex3d(s) => Ok(s),
+            other => Err(other.wrong_kind(path, SceneKind::Flex3d)),
+        }
+    }
+
+    /// The Oliveira drape, or an error naming the kind `path` holds instead.
+    pub fn into_oliveira(self, path: &Path) -> Result<LoadedOliveira, SceneError> {
+        match self {
+            Scene::Oliveira(s) => Ok(s),
+            other => Err(other.wrong_kind(path, SceneKind::Oliveira)),
+        }
+    }
+
+    fn wrong_kind(&self, path: &Path, wanted: SceneKind) -> SceneError {
+        SceneError::Kind {
+            path: path.to_owned(),
+            why: format!("expected a {} scene, found a {} scene", wanted.name(), self.kind().name()),
+        }
+    }
+}
+
+/// Loads a FLEX3D scene (a `.PAR` script or `Flex3dScene(…)`) with its objects; any other kind is an
+/// error naming the kind found.
+pub fn load_flex3d(path: &Path, opts: &LoadOptions) -> Result<LoadedFlex3d, SceneError> {
+    load(path, opts)?.into_flex3d(path)
+}
+
+/// Loads an Oliveira drape (static or adaptive) with its meshes; any other kind is an error.
+pub fn load_oliveira(path: &Path) -> Result<LoadedOliveira, SceneError> {
+    load(path, &LoadOptions::default())?.into_oliveira(path)
+}
+
+/// The struct names of the scene kinds, for messages.
+const SCENE_NAMES: &str =
+    "`Flex3dScene`, `SheetScene`, `OliveiraScene`, `AdaptiveOliveiraScene`, `BodyScene` or `CharacterScene`";
+
+/// Loads a scene of any kind and every part it names (`.OBT` objects, OBJ meshes, skeletons, the
+/// controller), resolved relative to the scene file's folder. The kind is told by the extension
+/// (`.par`, any case) or by the struct a `.ron` file starts with; every file is read once.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
+    let bytes = fs::read(path).map_err(SceneError::read(path))?;
+    let file = File { path, folder: folder_of(path) };
+    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    match extension.as_str() {
+        "par" => {
+            let script = par::parse(&bytes).map_err(|e| file.parse_error(e))?;
+            let mut scene = script.to_scene(FLEX3D_GRAVITY);
+            if let Some(g) = opts.gravity {
+                scene.gravity_m_s2 = g;
+            }
+            Ok(Scene::Flex3d(LoadedFlex3d { objects: file.obt_objects(&scene.objects)?, scene }))
+        }
+        "ron" => {
+            let text = utf8(&bytes).map_err(|e| file.parse_error(e))?;
+            load_ron(&file, text, opts)
+        }
+        _ => Err(SceneError::Kind {
+            path: path.to_owned(),
+            why: "expected a scene file ending in .par or .ron".to_owned(),
+        }),
+    }
+}
+
+fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneError> {
+    let parse = |e| file.parse_error(e);
+    match struct_name(text).or_else(|| kind_by_fields(text)) {
+        Some("Flex3dScene") => {
+            let mut scene = crate::flex3d::from_ron_str(text).map_err(parse)?;
+            if let Some(g) = opts.gravity {
+                scene.gravity_m_s2 = g;
+            }
+            Ok(Scene::Flex3d(LoadedFlex3d { objects: file.obt_objects(&scene.objects)?, scene }))
+        }
+        Some("SheetScene") => Ok(Scene::Sheet(crate::sheet::from_ron_str(text).map_err(parse)?)),
+        Some("OliveiraScene") => {
+            let scene = crate::oliveira::from_ron_str(text).map_err(parse)?;
+            Ok(Scene::Oliveira(LoadedOliveira { meshes: file.obj_meshes(&scene)?, scene, remesher: None }))
+        }
+        Some("AdaptiveOliveiraScene") => {
+            let a = crate::oliveira::adaptive_from_ron_str(text).map_err(parse)?;
+            a.remesher.method().map_err(|why| file.invalid_at(text, "remesher", why))?;
+            Ok(Scene::Oliveira(LoadedOliveira {
+                meshes: file.obj_meshes(&a.drape)?,
+                scene: a.drape,
+                remesher: Some(a.remesher),
+            }))
+        }
+        Some("BodyScene") => {
+            let scene = BodyScene::from_ron_str(text).map_err(|e| file.description(e))?;
+            let skeletons =
+                scene.models.iter().map(|m| file.skeleton(&m.skeleton)).collect::<Result<Vec<_>, _>>()?;
+            Ok(Scene::Body(LoadedBody { scene, skeletons }))
+        }
+        Some("CharacterScene") => Ok(Scene::Character(file.character(text)?)),
+        Some("Optimisation") => {
+            Err(file.kind("an optimisation spec, not a scene: run it with `anima optimise`"))
+        }
+        Some("Skeleton") => {
+            Err(file
+                .kind("a skeleton, which is a part of a scene: name it in a `BodyScene` or `CharacterScene`"))
+        }
+        Some("Controller") => Err(file.kind(
+            "a controller, which is a part of a scene: name it in a `CharacterScene` or an `Optimisation`",
+        )),
+        Some(other) => Err(file.kind(&format!("expected a scene ({SCENE_NAMES}), found `{other}`"))),
+        None => Err(file.kind(&format!(
+            "cannot tell which kind of scene this is: start it with its kind, one of {SCENE_NAMES}"
+        ))),
+    }
+}
+
+/// The kind of an unnamed RON scene, from a top-level field only one kind has.
+fn kind_by_fields(text: &str) -> Option<&'static str> {
+    let sites = anima_format::ron_path::field_sites(text);
+    let top = |name: &str| sites.iter().any(|s| s.path == name);
+    if top("surfaces") {
+        Some("Flex3dScene")
+    } else if top("cloth") && top("material") {
+        Some("OliveiraScene")
+    } else if top("drape") && top("remesher") {
+        Some("AdaptiveOliveiraScene")
+    } else if top("sheet") {
+        Some("SheetScene")
+    } else if top("controller") && top("models") {
+        Some("CharacterScene")
+    } else if top("models") {
+        Some("BodyScene")
+    } else {
+        None
+    }
+}
+
+/// Loads an optimisation spec and the controller it names.
+pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> {
+    let bytes = fs::read(path).map_err(SceneError::read(path))?;
+    let file = File { path, folder: folder_of(path) };
+    let text = utf8(&bytes).map_err(|e| file.parse_error(e))?;
+    match struct_name(text) {
+        Some("Optimisation") | None => {}
+        Some(other) => {
+            return Err(
+                file.kind(&format!("expected an optimisation spec, `Optimisation(…)`, found `{other}`"))
+            );
+        }
+    }
+    let spec: OptimisationSpec = anima_format::ron_text::from_str(text).map_err(|e| file.parse_error(e))?;
+    if spec.evaluations == 0 {
+        return Err(file.invalid_at(text, "evaluations", "expected at least one evaluation".into()));
+    }
+    let controller = file.controller(&spec.controller)?;
+    Ok(LoadedOptimisation { spec, controller })
+}
+
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
-    };
-    let objects = scene
-        .objects
-        .iter()
-        .map(|name| {
-            let obt = resolve(folder, name).ok_or_else(|| SceneError::ObjectNotFound {
-                scene: path.to_owned(),
-                name: name.clone(),
-                folder: folder.to_owned(),
-            })?;
-            let bytes = fs::read(&obt).map_err(|source| SceneError::Read { path: obt.clone(), source })?;
-            let object = read_obt(&bytes[..], IndexBase::Auto)
-                .map_err(|source| SceneError::Object { path: obt.clone(), source })?;
-            let mesh =
-                object.to_mesh().map_err(|source| SceneError::ObjectMesh { path: obt.clone(), source })?;
-            Ok((name.clone(), mesh))
-        })
-        .collect::<Result<_, SceneError>>()?;
-
-    Ok(LoadedScene { scene, objects, path: path.to_owned() })
+    }
 }
 
-/// Converts a `.PAR` script to an equivalent RON scene. `gravity` applies when the script has no
-/// `GRAVIDADE` (see [`par::ParScript::to_scene`]); `file_name` goes into errors.
-pub fn convert_par_to_ron(src_bytes: &[u8], file_name: &str, gravity: DVec3) -> Result<String, ParseError> {
-    let script = par::parse(src_bytes).map_err(|e| e.with_file(file_name))?;
-    Ok(ron_scene::to_ron_string(&script.to_scene(gravity)))
+/// The scene file being loaded, for its parts and its errors.
+struct File<'a> {
+    path: &'a Path,
+    folder: &'a Path,
 }
 
-/// The exact name first, then a case-insensitive match in the same folder (spec S2.5: A2.8 writes
-/// `mesa.obt` while the format's extension is `.OBT`). Several case-insensitive matches: the first in
-/// byte order, so the choice does not depend on the file system's listing order.
+impl File<'_> {
+    fn parse_error(&self, e: anima_format::ParseError) -> SceneError {
+        SceneError::Parse(e.with_file(self.path.display().to_string()))
+    }
+
+    fn description(&self, e: FieldError) -> SceneError {
+        SceneError::Description { path: self.path.to_owned(), source: e }
+    }
+
+    fn kind(&self, why: &str) -> SceneError {
+        SceneError::Kind { path: self.path.to_owned(), why: why.to_owned() }
+    }
+
+    /// A value of field `field` the format accepts but a run cannot use, placed at its line.
+    fn invalid_at(&self, text: &str, field: &str, why: String) -> SceneError {
+        self.description(FieldError::invalid(field, why).locate(text))
+    }
+
+    fn read(&self, what: &'static str, name: &str) -> Result<(PathBuf, Vec<u8>), SceneError> {
+        let path = self.folder.join(name);
+        match fs::read(&path) {
+            Ok(bytes) => Ok((path, bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::PartNotFound {
+                scene: self.path.to_owned(),
+                what,
+                name: name.to_owned(),
+                folder: self.folder.to_owned(),
+            }),
+            Err(source) => Err(SceneError::Read { path, source }),
+        }
+    }
+
+    /// FLEX3D's `.OBT` objects: the exact name first, then a case-insensitive match in the same folder
+    /// (spec S2.5: A2.8 writes `mesa.obt` while the format's extension is `.OBT`).
+    fn obt_objects(&self, names: &[String]) -> Result<Vec<(String, TriangleMesh)>, SceneError> {
+        names
+            .iter()
+            .map(|name| {
+                let path = resolve(self.folder, name).ok_or_else(|| SceneError::PartNotFound {
+                    scene: self.path.to_owned(),
+                    what: "object file (tried the exact name, then ignoring case)",
+                    name: name.clone(),
+                    folder: self.folder.to_owned(),
+                })?;
+                let bytes = fs::read(&path).map_err(SceneError::read(&path))?;
+                let object = read_obt(&bytes[..], IndexBase::Auto)
+                    .map_err(|source| SceneError::Obt { path: path.clone(), source })?;
+                let mesh = object.to_mesh().map_err(|source| SceneError::Mesh { path, source })?;
+                Ok((name.clone(), mesh))
+            })
+            .collect()
+    }
+
+    /// The OBJ meshes of a drape's `Mesh` objects, in scene order.
+    fn obj_meshes(&self, scene: &OliveiraScene) -> Result<Vec<(String, TriangleMesh)>, SceneError> {
+        let mut meshes = Vec::new();
+        for object in &scene.objects {
+            if let ShapeDesc::Mesh { file, .. } = &object.shape {
+                let (path, bytes) = self.read("mesh file", file)?;
+                let mesh = read_obj(&bytes[..]).map_err(|source| SceneError::Obj { path, source })?;
+                meshes.push((file.clone(), mesh));
+            }
+        }
+        Ok(meshes)
+    }
+
+    fn skeleton(&self, source: &SkeletonSource) -> Result<Skeleton, SceneError> {
+        match source {
+            SkeletonSource::Builtin(b) => Ok(b.load()),
+            SkeletonSource::File(f) => {
+                let (path, bytes) = self.read("skeleton file", f)?;
+                let text =
+                    utf8(&bytes).map_err(|e| SceneError::Parse(e.with_file(path.display().to_string())))?;
+                Skeleton::from_ron_str(text).map_err(|source| SceneError::Description { path, source })
+            }
+        }
+    }
+
+    fn controller(&self, name: &str) -> Result<Controller, SceneError> {
+        let (path, bytes) = self.read("controller file", name)?;
+        let text = utf8(&bytes).map_err(|e| SceneError::Parse(e.with_file(path.display().to_string())))?;
+        Controller::from_ron(text, &anima_character::procedures())
+            .map_err(|source| SceneError::Description { path, source })
+    }
+
+    fn character(&self, text: &str) -> Result<LoadedCharacter, SceneError> {
+        let scene: CharacterScene =
+            anima_format::ron_text::from_str(text).map_err(|e| self.parse_error(e))?;
+        check_positive(self, text, "duration", scene.duration)?;
+        check_positive(self, text, "frame_interval", scene.frame_interval)?;
+        check_positive(self, text, "world.dt", scene.world.dt)?;
+        if scene.models.is_empty() {
+            return Err(self.invalid_at(text, "models", "expected at least one model".into()));
+        }
+        let mut skeletons = Vec::with_capacity(scene.models.len());
+        for (k, m) in scene.models.iter().enumerate() {
+            let sk = self.skeleton(&m.skeleton)?;
+            let sk = match &m.actuation {
+                Some(a) => sk.with_actuation(*a).map_err(|e| {
+                    self.description(
+                        FieldError::invalid(format!("models[{k}].{}", e.field), e.message).locate(text),
+                    )
+                })?,
+                None => sk,
+            };
+            skeletons.push(sk);
+        }
+        let controller = self.controller(&scene.controller)?;
+        // Every actuator the controller drives must be one of the models' (`alias/name`, or a model's
+        // own name when there is one model): checked here, so a wrong name is an error before the run.
+        for name in controller.actuators() {
+            let (model, local) = match name.split_once('/') {
+                Some((alias, local)) => (scene.models.iter().position(|m| m.alias == alias), local),
+                None => (Some(0), name.as_str()),
+            };
+            if model.is_none_or(|m| skeletons[m].actuator_index(local).is_none()) {
+                return Err(self.invalid_at(
+                    text,
+                    "controller",
+                    format!("controller actuator `{name}` names no actuator of the scene's models"),
+                ));
+            }
+        }
+        Ok(LoadedCharacter { scene, skeletons, controller })
+    }
+}
+
+fn check_positive(file: &File, text: &str, field: &str, v: f64) -> Result<(), SceneError> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(file.invalid_at(text, field, format!("expected a positive number of seconds, found {v}")))
+    }
+}
+
+/// The exact name first, then a case-insensitive match in the same folder. Several case-insensitive
+/// matches: the first in byte order, so the choice does not depend on the file system's listing order.
 fn resolve(folder: &Path, name: &str) -> Option<PathBuf> {
     let exact = folder.join(name);
     if exact.is_file() {

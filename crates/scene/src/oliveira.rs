@@ -1,91 +1,139 @@
 //! Oliveira drape scenes: an [`OliveiraScene`] written in RON (the struct is the schema; unknown fields
-//! are errors), plus the OBJ meshes its objects name, resolved relative to the scene file.
+//! are errors), `OliveiraScene(…)` for a static mesh or `AdaptiveOliveiraScene(drape: …, remesher: …)`
+//! for a remeshed one, plus the OBJ meshes its objects name, resolved relative to the scene file.
 
-use std::fs;
-use std::io;
-use std::path::{Path, PathBuf};
-
-use anima_cloth::oliveira::{BuildError, OliveiraCloth, OliveiraScene, ShapeDesc};
-use anima_geom::{ObjError, TriangleMesh, read_obj};
+use anima_cloth::oliveira::{
+    AdaptiveCloth, AdaptiveMethod, BuildError, OliveiraCloth, OliveiraRemeshing, OliveiraScene,
+    ShortEdgeRule, SizingRemeshing, SubdivisionRemeshing,
+};
+use anima_geom::TriangleMesh;
+use serde::{Deserialize, Serialize};
 
 use crate::ParseError;
-use anima_format::utf8;
 
 /// The comment every written scene starts with.
 const HEADER: &str = "// anima Oliveira 2013 drape. Units are SI (s, m, kg, N); z is up.\n";
 
-/// A scene with its meshes loaded.
+/// Which remesher an adaptive drape runs (Oliveira 2013 §4.5 and the baselines beside it), with the
+/// parameters the thesis's tests fixed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Remesher {
+    /// The thesis's remesher with the parameters of its Test `test` (1, 2 or 3; Tables 5.1, 5.3, 5.5),
+    /// the short-edge rule of the retry loop (spec Q-9) and a pass every `interval_s` (0: after every
+    /// step, as the thesis did).
+    Oliveira { test: u8, short_edge: ShortEdgeRule, interval_s: f64 },
+    /// Simnett's 1-to-4 subdivision with Table 5.5's parameters, a pass every `interval_s`.
+    Subdivision { interval_s: f64 },
+    /// A sizing-field remesher for a 1 m cloth (edges between `min_edge_m` and 25 cm), a pass every
+    /// `interval_s`.
+    SizingField { min_edge_m: f64, interval_s: f64 },
+}
+
+impl Remesher {
+    /// The cloth crate's remesher with these parameters; an error names what is out of range.
+    pub fn method(&self) -> Result<AdaptiveMethod, String> {
+        let interval = |i: f64| {
+            if i >= 0.0 && i.is_finite() {
+                Ok(i)
+            } else {
+                Err(format!("expected a pass interval ≥ 0 s, found {i}"))
+            }
+        };
+        Ok(match *self {
+            Remesher::Oliveira { test, short_edge, interval_s } => {
+                let base = match test {
+                    1 => OliveiraRemeshing::test_1(),
+                    2 => OliveiraRemeshing::test_2(),
+                    3 => OliveiraRemeshing::test_3(),
+                    other => return Err(format!("expected the thesis's test 1, 2 or 3, found {other}")),
+                };
+                AdaptiveMethod::Oliveira(OliveiraRemeshing {
+                    short_edge,
+                    interval_s: interval(interval_s)?,
+                    ..base
+                })
+            }
+            Remesher::Subdivision { interval_s } => AdaptiveMethod::Subdivision(SubdivisionRemeshing {
+                interval_s: interval(interval_s)?,
+                ..SubdivisionRemeshing::test_3()
+            }),
+            Remesher::SizingField { min_edge_m, interval_s } => {
+                if !(min_edge_m > 0.0 && min_edge_m < 0.25) {
+                    return Err(format!("expected a shortest edge between 0 and 0.25 m, found {min_edge_m}"));
+                }
+                AdaptiveMethod::SizingField(SizingRemeshing {
+                    interval_s: interval(interval_s)?,
+                    ..SizingRemeshing::for_cloth(min_edge_m)
+                })
+            }
+        })
+    }
+}
+
+/// A drape on a remeshed cloth: the static scene and the remesher.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "AdaptiveOliveiraScene", deny_unknown_fields)]
+pub struct AdaptiveOliveiraScene {
+    pub drape: OliveiraScene,
+    pub remesher: Remesher,
+}
+
+/// A drape with its meshes loaded.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LoadedOliveiraScene {
+pub struct LoadedOliveira {
     pub scene: OliveiraScene,
     /// One mesh per `Mesh` object, in scene order, with the file name as the scene wrote it.
     pub meshes: Vec<(String, TriangleMesh)>,
-    /// The scene file, as given to [`load`].
-    pub path: PathBuf,
+    /// The remesher of an adaptive scene; `None` for a static mesh.
+    pub remesher: Option<Remesher>,
 }
 
-impl LoadedOliveiraScene {
+impl LoadedOliveira {
     /// The cloth at rest among its objects.
     pub fn build(&self) -> Result<OliveiraCloth, BuildError> {
         OliveiraCloth::new(&self.scene, self.meshes.iter().map(|(_, m)| m.clone()).collect())
     }
+
+    /// The scene's remesher as the cloth crate takes it (`Static` for a static scene).
+    pub fn method(&self) -> AdaptiveMethod {
+        match &self.remesher {
+            // Checked when the scene was loaded.
+            Some(r) => r.method().unwrap_or(AdaptiveMethod::Static),
+            None => AdaptiveMethod::Static,
+        }
+    }
+
+    /// `cloth` (built by [`LoadedOliveira::build`], perhaps changed since) with the scene's remesher:
+    /// what a run steps.
+    pub fn with_remesher(&self, cloth: OliveiraCloth) -> AdaptiveCloth {
+        AdaptiveCloth::new(cloth, self.scene.gravity_m_s2, self.method())
+    }
 }
 
-/// Why an Oliveira scene could not be loaded. Every variant names the file at fault.
-#[derive(Debug, thiserror::Error)]
-pub enum OliveiraSceneError {
-    #[error("could not read {}: {source}", path.display())]
-    Read {
-        path: PathBuf,
-        #[source]
-        source: io::Error,
-    },
-    /// A syntax or schema error; its `file` is set.
-    #[error(transparent)]
-    Parse(#[from] ParseError),
-    #[error("{}:{source}", path.display())]
-    Mesh {
-        path: PathBuf,
-        #[source]
-        source: ObjError,
-    },
-}
-
-/// Reads a scene from RON text. Errors carry the line and column, what was expected and what was found.
+/// Reads a static scene from RON text. Errors carry the line and column, what was expected and what
+/// was found.
 pub fn from_ron_str(src: &str) -> Result<OliveiraScene, ParseError> {
     anima_format::ron_text::from_str(src)
 }
 
-/// Writes a scene as pretty RON after a header comment; [`from_ron_str`] reads back the same scene.
+/// Reads an adaptive scene from RON text.
+pub fn adaptive_from_ron_str(src: &str) -> Result<AdaptiveOliveiraScene, ParseError> {
+    anima_format::ron_text::from_str(src)
+}
+
+/// Writes a static scene as pretty RON, `OliveiraScene(…)`, after a header comment; [`from_ron_str`]
+/// reads back the same scene.
 pub fn to_ron_string(scene: &OliveiraScene) -> String {
     let body = ron::ser::to_string_pretty(scene, ron::ser::PrettyConfig::new())
         .expect("a scene is plain data, which RON can always represent");
-    format!("{HEADER}{body}\n")
+    format!("{HEADER}OliveiraScene{body}\n")
 }
 
-/// Loads a `.ron` Oliveira scene and every OBJ mesh it names.
-pub fn load(path: &Path) -> Result<LoadedOliveiraScene, OliveiraSceneError> {
-    let name = path.display().to_string();
-    let bytes =
-        fs::read(path).map_err(|source| OliveiraSceneError::Read { path: path.to_owned(), source })?;
-    let src = utf8(&bytes).map_err(|e| e.with_file(&name))?;
-    let scene = from_ron_str(src).map_err(|e| e.with_file(&name))?;
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut meshes = Vec::new();
-    for object in &scene.objects {
-        if let ShapeDesc::Mesh { file, .. } = &object.shape {
-            let mesh_path = folder.join(file);
-            let data = fs::read(&mesh_path)
-                .map_err(|source| OliveiraSceneError::Read { path: mesh_path.clone(), source })?;
-            let mesh =
-                read_obj(&data[..]).map_err(|source| OliveiraSceneError::Mesh { path: mesh_path, source })?;
-            meshes.push((file.clone(), mesh));
-        }
-    }
-    Ok(LoadedOliveiraScene { scene, meshes, path: path.to_owned() })
+/// Writes an adaptive scene as pretty RON after a header comment.
+pub fn adaptive_to_ron_string(scene: &AdaptiveOliveiraScene) -> String {
+    let body = ron::ser::to_string_pretty(scene, ron::ser::PrettyConfig::new())
+        .expect("a scene is plain data, which RON can always represent");
+    format!("{HEADER}AdaptiveOliveiraScene{body}\n")
 }
 
 #[cfg(test)]
@@ -110,7 +158,30 @@ mod tests {
         let scene = from_ron_str(MINIMAL).unwrap();
         assert_eq!(scene.integrator, anima_ode::Integrator::Rk4);
         assert_eq!(scene.options, anima_cloth::oliveira::Options::thesis());
-        assert_eq!(from_ron_str(&to_ron_string(&scene)).unwrap(), scene);
+        let text = to_ron_string(&scene);
+        assert_eq!(anima_format::ron_text::struct_name(&text), Some("OliveiraScene"));
+        assert_eq!(from_ron_str(&text).unwrap(), scene);
+    }
+
+    #[test]
+    fn adaptive_scenes_round_trip_and_check_their_remesher() {
+        let drape = from_ron_str(MINIMAL).unwrap();
+        let scene = AdaptiveOliveiraScene {
+            drape,
+            remesher: Remesher::Oliveira { test: 1, short_edge: ShortEdgeRule::MinLength, interval_s: 1e-3 },
+        };
+        let text = adaptive_to_ron_string(&scene);
+        assert_eq!(anima_format::ron_text::struct_name(&text), Some("AdaptiveOliveiraScene"));
+        assert_eq!(adaptive_from_ron_str(&text).unwrap(), scene);
+        let AdaptiveMethod::Oliveira(p) = scene.remesher.method().unwrap() else {
+            panic!("the thesis's remesher")
+        };
+        assert_eq!((p.short_edge, p.interval_s), (ShortEdgeRule::MinLength, 1e-3));
+        assert_eq!(p.min_rest_length, OliveiraRemeshing::test_1().min_rest_length);
+        let bad = Remesher::Oliveira { test: 4, short_edge: ShortEdgeRule::MinLength, interval_s: 0.0 };
+        assert!(bad.method().unwrap_err().contains("test 1, 2 or 3"));
+        assert!(Remesher::SizingField { min_edge_m: 0.0, interval_s: 0.1 }.method().is_err());
+        assert!(Remesher::Subdivision { interval_s: -1.0 }.method().is_err());
     }
 
     #[test]

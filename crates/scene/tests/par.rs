@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use anima_cloth::flex3d::{FrictionMode, ModelOptions, Translation};
 use anima_geom::DVec3;
 use anima_ode::Integrator;
+use anima_scene::flex3d::{from_ron_str, to_ron_string};
 use anima_scene::par::{self, Curvature, ParScript};
-use anima_scene::ron_scene::{from_ron_str, to_ron_string};
 use anima_scene::{
-    END_OF_FILE, FLEX3D_GRAVITY, LoadOptions, ParseError, SceneError, convert_par_to_ron, load,
+    END_OF_FILE, FLEX3D_GRAVITY, LoadOptions, ParseError, SceneError, convert_par_to_ron, load_flex3d,
 };
 
 /// A2.2, the wind scene: short, and it has every part of a surface block.
@@ -265,9 +265,12 @@ fn gravidade_keyword_wins_over_the_default_and_loses_to_the_override() {
     let dir = scratch("gravidade");
     let path = dir.join("lua.PAR");
     fs::write(&path, &src).unwrap();
-    assert_eq!(load(&path, &LoadOptions::default()).unwrap().scene.gravity_m_s2, DVec3::new(0.0, -1.6, 0.0));
+    assert_eq!(
+        load_flex3d(&path, &LoadOptions::default()).unwrap().scene.gravity_m_s2,
+        DVec3::new(0.0, -1.6, 0.0)
+    );
     let off = LoadOptions { gravity: Some(DVec3::ZERO) };
-    assert_eq!(load(&path, &off).unwrap().scene.gravity_m_s2, DVec3::ZERO);
+    assert_eq!(load_flex3d(&path, &off).unwrap().scene.gravity_m_s2, DVec3::ZERO);
     fs::remove_dir_all(dir).unwrap();
 }
 
@@ -275,7 +278,7 @@ fn gravidade_keyword_wins_over_the_default_and_loses_to_the_override() {
 
 #[test]
 fn load_a2_8_finds_mesa_obt() {
-    let loaded = load(&asset("a2-8-toalha.par"), &LoadOptions::default()).unwrap();
+    let loaded = load_flex3d(&asset("a2-8-toalha.par"), &LoadOptions::default()).unwrap();
     assert_eq!(loaded.scene.gravity_m_s2, FLEX3D_GRAVITY, "no GRAVIDADE and no override: gravity on");
     assert_eq!(loaded.objects.len(), 1);
     let (name, mesh) = &loaded.objects[0];
@@ -285,7 +288,7 @@ fn load_a2_8_finds_mesa_obt() {
     assert_eq!((top.min, top.max), (DVec3::new(-10.5, 0.0, -10.5), DVec3::new(10.5, 10.0, 10.5)));
 
     let off = LoadOptions { gravity: Some(DVec3::ZERO) };
-    assert_eq!(load(&asset("a2-8-toalha.par"), &off).unwrap().scene.gravity_m_s2, DVec3::ZERO);
+    assert_eq!(load_flex3d(&asset("a2-8-toalha.par"), &off).unwrap().scene.gravity_m_s2, DVec3::ZERO);
 }
 
 #[test]
@@ -293,16 +296,16 @@ fn load_matches_object_names_ignoring_case_and_reads_ron() {
     let dir = scratch("case");
     fs::copy(asset("a2-8-toalha.par"), dir.join("TOALHA.PAR")).unwrap();
     fs::copy(asset("mesa.obt"), dir.join("MESA.OBT")).unwrap();
-    let from_par = load(&dir.join("TOALHA.PAR"), &LoadOptions::default()).unwrap();
+    let from_par = load_flex3d(&dir.join("TOALHA.PAR"), &LoadOptions::default()).unwrap();
     assert_eq!(from_par.objects[0].1.n_triangles(), 12);
 
     let ron = convert_par_to_ron(&fs::read(asset("a2-8-toalha.par")).unwrap(), "a2-8", DVec3::ZERO).unwrap();
     fs::write(dir.join("toalha.ron"), ron).unwrap();
-    let from_ron = load(&dir.join("toalha.ron"), &LoadOptions::default()).unwrap();
+    let from_ron = load_flex3d(&dir.join("toalha.ron"), &LoadOptions::default()).unwrap();
     assert_eq!(from_ron.scene.gravity_m_s2, DVec3::ZERO, "a RON scene keeps its own gravity");
     assert_eq!(from_ron.objects, from_par.objects);
     let g = LoadOptions { gravity: Some(FLEX3D_GRAVITY) };
-    assert_eq!(load(&dir.join("toalha.ron"), &g).unwrap().scene, from_par.scene);
+    assert_eq!(load_flex3d(&dir.join("toalha.ron"), &g).unwrap().scene, from_par.scene);
     fs::remove_dir_all(dir).unwrap();
 }
 
@@ -310,19 +313,19 @@ fn load_matches_object_names_ignoring_case_and_reads_ron() {
 fn load_errors_name_the_file() {
     let dir = scratch("errors");
     fs::copy(asset("a2-8-toalha.par"), dir.join("toalha.par")).unwrap();
-    let e = load(&dir.join("toalha.par"), &LoadOptions::default()).unwrap_err();
-    assert!(matches!(&e, SceneError::ObjectNotFound { name, .. } if name == "mesa.obt"), "{e}");
+    let e = load_flex3d(&dir.join("toalha.par"), &LoadOptions::default()).unwrap_err();
+    assert!(matches!(&e, SceneError::PartNotFound { name, .. } if name == "mesa.obt"), "{e}");
     assert!(e.to_string().contains("toalha.par") && e.to_string().contains("mesa.obt"), "{e}");
 
     fs::write(dir.join("mesa.obt"), "$OBJETO mesa 0 0 0 1 $VÉRTICES 1 0 0 0 $FACES x").unwrap();
-    let e = load(&dir.join("toalha.par"), &LoadOptions::default()).unwrap_err();
-    assert!(matches!(e, SceneError::Object { .. }), "{e}");
+    let e = load_flex3d(&dir.join("toalha.par"), &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, SceneError::Obt { .. }), "{e}");
     assert!(e.to_string().contains("mesa.obt:1:") && e.to_string().contains("found \"x\""), "{e}");
 
-    let e = load(&dir.join("missing.par"), &LoadOptions::default()).unwrap_err();
+    let e = load_flex3d(&dir.join("missing.par"), &LoadOptions::default()).unwrap_err();
     assert!(matches!(e, SceneError::Read { .. }) && e.to_string().contains("missing.par"), "{e}");
 
-    let ocr = load(&asset("fig6-4-papel-ocr.par"), &LoadOptions::default()).unwrap_err();
+    let ocr = load_flex3d(&asset("fig6-4-papel-ocr.par"), &LoadOptions::default()).unwrap_err();
     let SceneError::Parse(p) = &ocr else { panic!("{ocr}") };
     assert!(p.file.as_deref().is_some_and(|f| f.ends_with("fig6-4-papel-ocr.par")), "{ocr}");
     assert!(ocr.to_string().contains("fig6-4-papel-ocr.par:18:5: expected a row index"), "{ocr}");

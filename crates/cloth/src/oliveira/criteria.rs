@@ -35,7 +35,7 @@ pub enum CurvatureLimit {
 }
 
 /// The too-short-edge rule of the refinement retry loop (spec §6.6, Q-9).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum ShortEdgeRule {
     /// Reject a patch with an edge shorter than (L⁰_min)², the number as printed (metres squared read as
     /// metres). The default: it is what lets the thesis's remeshing make edges shorter than 1-to-4's.

@@ -8,7 +8,7 @@ use anima_cloth::flex3d::mass_spring::{TABLE_4_1_STEPS, TABLE_4_1_THESIS, table_
 use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dWorld, FrictionMode};
 use anima_geom::DVec3;
 use anima_ode::Integrator;
-use anima_scene::{LoadOptions, LoadedScene};
+use anima_scene::{LoadOptions, LoadedFlex3d};
 use anyhow::Result;
 
 pub mod report;
@@ -97,25 +97,24 @@ impl ThesisScene {
     }
 
     /// Loads the script with the thesis's gravity.
-    pub fn load(self) -> Result<LoadedScene> {
-        Ok(anima_scene::load(
+    pub fn load(self) -> Result<LoadedFlex3d> {
+        Ok(anima_scene::load_flex3d(
             &flex3d_assets().join(self.script()),
             &LoadOptions { gravity: Some(self.gravity()) },
         )?)
     }
 
     /// A fresh world of the scene.
-    pub fn world(self, edit: impl FnOnce(&mut LoadedScene)) -> Result<(LoadedScene, Flex3dWorld)> {
+    pub fn world(self, edit: impl FnOnce(&mut LoadedFlex3d)) -> Result<(LoadedFlex3d, Flex3dWorld)> {
         let mut loaded = self.load()?;
         edit(&mut loaded);
-        let objects = loaded.objects.iter().map(|(_, m)| m.clone()).collect();
-        let world = Flex3dWorld::new(&loaded.scene, objects)?;
+        let world = Flex3dWorld::new(&loaded.scene, loaded.meshes())?;
         Ok((loaded, world))
     }
 }
 
 /// Runs `world` to the end of frame `k` of `loaded`.
-pub fn run_to_frame(loaded: &LoadedScene, world: &mut Flex3dWorld, k: usize) -> Result<()> {
+pub fn run_to_frame(loaded: &LoadedFlex3d, world: &mut Flex3dWorld, k: usize) -> Result<()> {
     Ok(world.run_to_step(loaded.scene.frame_step(k))?)
 }
 

@@ -11,14 +11,14 @@ use crate::repo::Repo;
 use crate::run::body::{SKY, draw_bodies, draw_ground};
 use anima_body::BodyPose;
 use anima_character::Character;
-use anima_control::Controller;
 use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Optimiser, RandomSearch, RunLog, run,
 };
 use anima_viz::{Image, LinePlot, Series, View2d, draw_line, fill_disc};
 use anyhow::{Context, Result};
 
-use crate::nunes::report::{SEED, throw_fitness, throw_stage, walk_fitness, walk_stages};
+use crate::nunes::report::{SEED, thesis_spec};
+use anima_scene::optimisation::OptimiserSpec;
 
 /// Every body of every model after one control iteration.
 type Frame = Vec<Vec<BodyPose>>;
@@ -320,24 +320,27 @@ fn compare(
     Ok(logs)
 }
 
-fn walk_fitness_figure() -> Result<Image> {
-    let base = nunes::controller("walk")?;
-    let ids = base.free_params(&anima_control::Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+/// The four optimisers on one of the thesis's specs (`walk` or `throw`): the greedy search with the
+/// spec's stages against CMA-ES, random search and annealing over the spec's objective and budget.
+fn spec_logs(repo: &Repo, name: &str, sigma: f64) -> Result<Vec<(&'static str, RunLog)>> {
+    let loaded = thesis_spec(repo, name)?;
+    let (spec, base) = (&loaded.spec, &loaded.controller);
+    let ids = base.free_params(&spec.parameters);
     let x0 = base.values_of(&ids);
-    let objective = |x: &[f64]| walk_fitness(&base, x);
-    let logs = compare(base.space(&ids), &x0, walk_stages(ids.len()), 45, 2.0, &objective)?;
+    let OptimiserSpec::Greedy { stages } = &spec.optimiser else {
+        anyhow::bail!("{name}: the thesis's spec is a greedy search")
+    };
+    let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
+    compare(base.space(&ids), &x0, stages.clone(), spec.evaluations - 1, sigma, &objective)
+}
+
+fn walk_fitness_figure(repo: &Repo) -> Result<Image> {
+    let logs = spec_logs(repo, "walk", 2.0)?;
     fitness_plot("Walking: distance in 50 s (p2, p3, p5, p6)", "best fitness (m)", &logs)
 }
 
-fn throw_fitness_figure() -> Result<Image> {
-    let base: Controller = nunes::controller("throw")?;
-    let ids = base.free_params(&anima_control::Selection::all());
-    let x0 = base.values_of(&ids);
-    let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
-    let objective = |x: &[f64]| throw_fitness(&base, &ids, x, cap);
-    let budget = 400;
-    let logs =
-        compare(base.space(&ids), &x0, vec![throw_stage(&base, &ids, budget)], budget, 0.5, &objective)?;
+fn throw_fitness_figure(repo: &Repo) -> Result<Image> {
+    let logs = spec_logs(repo, "throw", 0.5)?;
     fitness_plot("Throwing: Eq. 6.1 with the height cap", "best fitness", &logs)
 }
 
@@ -353,8 +356,8 @@ pub fn figures(repo: &Repo) -> Result<()> {
     eprintln!("anima-lab: pushes on the robust and SIMBICON walkers …");
     save("nunes-pushes.png", &fig_pushes().context("push figure")?)?;
     eprintln!("anima-lab: walking fitness against evaluations …");
-    save("nunes-walk-fitness.png", &walk_fitness_figure()?)?;
+    save("nunes-walk-fitness.png", &walk_fitness_figure(repo)?)?;
     eprintln!("anima-lab: throwing fitness against evaluations …");
-    save("nunes-throw-fitness.png", &throw_fitness_figure()?)?;
+    save("nunes-throw-fitness.png", &throw_fitness_figure(repo)?)?;
     Ok(())
 }

@@ -82,7 +82,7 @@ impl Push {
 }
 
 /// How a walk ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct WalkOutcome {
     /// Iterations simulated (all of them unless it fell or stopped).
     pub iterations: u64,
@@ -127,6 +127,75 @@ pub fn fallen(s: &anima_body::Sensors, rules: &WalkRules) -> bool {
     body_down || low || !s.all_finite()
 }
 
+/// The walking evaluation (spec §7.4, §7.6) of a character's first model, one control step at a time:
+/// fallen and stopped tests and the distance walked. [`walk`] runs it on the thesis's humanoid; a
+/// character scene's run uses it as is.
+#[derive(Debug, Clone)]
+pub struct WalkTracker {
+    rules: WalkRules,
+    x0: f64,
+    history: std::collections::VecDeque<f64>,
+    fell: bool,
+    stopped: bool,
+    done: u64,
+}
+
+impl WalkTracker {
+    /// Starts at the character's present state.
+    pub fn new(c: &Character, rules: &WalkRules) -> Self {
+        Self {
+            rules: *rules,
+            x0: c.env.sensors[0].com[0],
+            history: std::collections::VecDeque::with_capacity(rules.window as usize + 1),
+            fell: false,
+            stopped: false,
+            done: 0,
+        }
+    }
+
+    /// Takes in the state after a control step; `true` when the rules end the evaluation here.
+    pub fn observe(&mut self, c: &Character) -> bool {
+        self.done += 1;
+        let s = &c.env.sensors[0];
+        if !self.fell && fallen(s, &self.rules) {
+            self.fell = true;
+        }
+        if self.rules.window > 0 {
+            self.history.push_back(s.com[0]);
+            if self.history.len() > self.rules.window as usize {
+                let old = self.history.pop_front().unwrap_or(s.com[0]);
+                if !self.stopped && s.com[0] - old < self.rules.min_advance {
+                    self.stopped = true;
+                }
+            }
+        }
+        self.rules.stop_on_failure && (self.fell || self.stopped)
+    }
+
+    pub fn outcome(&self, c: &Character) -> WalkOutcome {
+        let distance = c.env.sensors[0].com[0] - self.x0;
+        WalkOutcome { iterations: self.done, distance, fell: self.fell, stopped: self.stopped }
+    }
+}
+
+/// Applies the pushes due at control step `k` (0-based) to model 0's head.
+pub fn apply_pushes(c: &mut Character, pushes: &[Push], k: u64) -> Result<(), CharacterError> {
+    if pushes.is_empty() {
+        return Ok(());
+    }
+    let head = c.env.world.skeleton(0)?.body_index("head");
+    for p in pushes {
+        if k >= p.at
+            && k < p.at + p.duration
+            && let Some(h) = head
+        {
+            let at = c.env.sensors[0].body_position[h];
+            c.env.world.apply_force(0, h, p.force, at)?;
+        }
+    }
+    Ok(())
+}
+
 /// Runs a walker for `iterations` control steps (spec §7.4): fitness per §7.6. `observe` sees the
 /// character after every step (for strobe pictures); pass `|_| ()` otherwise.
 pub fn walk(
@@ -137,43 +206,16 @@ pub fn walk(
     mut observe: impl FnMut(&Character),
 ) -> Result<WalkOutcome, CharacterError> {
     let mut c = humanoid_character(controller)?;
-    let x0 = c.env.sensors[0].com[0];
-    let head = c.env.world.skeleton(0)?.body_index("head");
-    let mut history = std::collections::VecDeque::with_capacity(rules.window as usize + 1);
-    let (mut fell, mut stopped) = (false, false);
-    let mut done = 0;
+    let mut tracker = WalkTracker::new(&c, rules);
     for k in 0..iterations {
-        for p in pushes {
-            if k >= p.at
-                && k < p.at + p.duration
-                && let Some(h) = head
-            {
-                let at = c.env.sensors[0].body_position[h];
-                c.env.world.apply_force(0, h, p.force, at)?;
-            }
-        }
+        apply_pushes(&mut c, pushes, k)?;
         c.step()?;
-        done = k + 1;
         observe(&c);
-        let s = &c.env.sensors[0];
-        if !fell && fallen(s, rules) {
-            fell = true;
-        }
-        if rules.window > 0 {
-            history.push_back(s.com[0]);
-            if history.len() > rules.window as usize {
-                let old = history.pop_front().unwrap_or(s.com[0]);
-                if !stopped && s.com[0] - old < rules.min_advance {
-                    stopped = true;
-                }
-            }
-        }
-        if rules.stop_on_failure && (fell || stopped) {
+        if tracker.observe(&c) {
             break;
         }
     }
-    let distance = c.env.sensors[0].com[0] - x0;
-    Ok(WalkOutcome { iterations: done, distance, fell, stopped })
+    Ok(tracker.outcome(&c))
 }
 
 /// A symmetric description of the walker's leg poses: W-LEGS's E1 and E3 by swing and stance leg (E4
@@ -382,7 +424,7 @@ pub struct Basket {
 pub const BASKET: Basket = Basket { hoop: [2.5, 2.5], radius: 0.2 };
 
 /// How a throw ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ThrowOutcome {
     /// Highest ball centre, m.
     pub h_max: f64,
@@ -418,6 +460,71 @@ impl ThrowOutcome {
     }
 }
 
+/// The throwing evaluation (Eq. 6.1) of a character whose first model holds the ball, one control step
+/// at a time: highest point, nearest approach to the aimed point, whether it went through the hoop.
+#[derive(Debug, Clone)]
+pub struct ThrowTracker {
+    basket: Basket,
+    ball: usize,
+    target: [f64; 2],
+    prev: [f64; 2],
+    out: ThrowOutcome,
+}
+
+impl ThrowTracker {
+    /// Starts at the character's present state; `None` when its first model has no body `ball`.
+    pub fn new(c: &Character, basket: &Basket) -> Result<Option<Self>, CharacterError> {
+        let Some(ball) = c.env.world.skeleton(0)?.body_index("ball") else { return Ok(None) };
+        Ok(Some(Self {
+            basket: *basket,
+            ball,
+            target: [basket.hoop[0], basket.hoop[1] + 0.25],
+            prev: c.env.sensors[0].body_position[ball],
+            out: ThrowOutcome {
+                h_max: f64::NEG_INFINITY,
+                d_min: f64::INFINITY,
+                scored: false,
+                fell: false,
+                released_at: None,
+                iterations: 0,
+            },
+        }))
+    }
+
+    /// Takes in the state after a control step; `true` when the throw is over (the thrower fell, or the
+    /// ball touched the ground after its release).
+    pub fn observe(&mut self, c: &Character) -> bool {
+        let (basket, ball, target, out) = (&self.basket, self.ball, self.target, &mut self.out);
+        out.iterations += 1;
+        let s = &c.env.sensors[0];
+        let p = s.body_position[ball];
+        out.h_max = out.h_max.max(p[1]);
+        out.d_min = out.d_min.min(((p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)).sqrt());
+        let prev = self.prev;
+        if prev[1] >= basket.hoop[1] && p[1] < basket.hoop[1] {
+            let t = (prev[1] - basket.hoop[1]) / (prev[1] - p[1]);
+            let x = prev[0] + t * (p[0] - prev[0]);
+            out.scored |= (x - basket.hoop[0]).abs() < basket.radius;
+        }
+        self.prev = p;
+        let feet = s.layout.feet;
+        let body_down =
+            s.on_ground.iter().enumerate().any(|(b, &g)| g && b != ball && !feet.contains(&Some(b)));
+        let low =
+            s.layout.pelvis.is_some_and(|pv| s.body_position[pv][1] < WalkRules::default().min_pelvis_height);
+        if body_down || low || !s.all_finite() {
+            out.fell = true;
+            return true;
+        }
+        out.released_at = c.env.released_at;
+        out.released_at.is_some() && s.on_ground[ball]
+    }
+
+    pub fn outcome(&self) -> ThrowOutcome {
+        self.out
+    }
+}
+
 /// Runs a throw until the ball touches the ground after its release (at most `max_iterations`).
 pub fn throw(
     controller: Controller,
@@ -426,50 +533,17 @@ pub fn throw(
     mut observe: impl FnMut(&Character),
 ) -> Result<ThrowOutcome, CharacterError> {
     let mut c = thrower_character(controller)?;
-    let ball = c.env.world.skeleton(0)?.body_index("ball").expect("the thrower has a ball");
-    let target = [basket.hoop[0], basket.hoop[1] + 0.25];
-    let rules = WalkRules::default();
-    let mut out = ThrowOutcome {
-        h_max: f64::NEG_INFINITY,
-        d_min: f64::INFINITY,
-        scored: false,
-        fell: false,
-        released_at: None,
-        iterations: 0,
-    };
-    let mut prev = c.env.sensors[0].body_position[ball];
-    for k in 0..max_iterations {
+    let mut tracker = ThrowTracker::new(&c, basket)?.expect("the thrower has a ball");
+    for _ in 0..max_iterations {
         c.step()?;
-        out.iterations = k + 1;
         observe(&c);
-        let s = &c.env.sensors[0];
-        let p = s.body_position[ball];
-        out.h_max = out.h_max.max(p[1]);
-        out.d_min = out.d_min.min(((p[0] - target[0]).powi(2) + (p[1] - target[1]).powi(2)).sqrt());
-        if prev[1] >= basket.hoop[1] && p[1] < basket.hoop[1] {
-            let t = (prev[1] - basket.hoop[1]) / (prev[1] - p[1]);
-            let x = prev[0] + t * (p[0] - prev[0]);
-            out.scored |= (x - basket.hoop[0]).abs() < basket.radius;
-        }
-        prev = p;
-        let feet = s.layout.feet;
-        let body_down =
-            s.on_ground.iter().enumerate().any(|(b, &g)| g && b != ball && !feet.contains(&Some(b)));
-        let low = s.layout.pelvis.is_some_and(|pv| s.body_position[pv][1] < rules.min_pelvis_height);
-        if body_down || low || !s.all_finite() {
-            out.fell = true;
-            break;
-        }
-        out.released_at = c.env.released_at;
-        if out.released_at.is_some() && s.on_ground[ball] {
+        if tracker.observe(&c) {
             break;
         }
     }
-    Ok(out)
+    Ok(tracker.outcome())
 }
 
-/// Spacing of the backflip's two humanoids, pelvis centre to pelvis centre, m (spec §3.5.2 [GAP]:
-/// 0.8–1.0 m proposed; `assets/scenes/backflip-pair.ron` uses the same value).
 pub const FLIP_SPACING: f64 = 0.9;
 
 /// The backflip pair (spec §3.5.2): the acrobat facing +x at x = 0 and the pusher facing −x
@@ -484,7 +558,7 @@ pub fn backflip_character(controller: Controller, spacing: f64) -> Result<Charac
 }
 
 /// How a backflip ended (spec §8.4.6, §8.5 item 8).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct FlipOutcome {
     /// The acrobat's abdomen rotation from the start, rad, positive backwards (counter-clockwise for
     /// a model facing +x): the largest reached, and the value at the end.
@@ -519,6 +593,111 @@ impl FlipOutcome {
     }
 }
 
+/// The backflip's evaluation (spec §8.4) of a two-model character (acrobat, pusher), one control step
+/// at a time: the acrobat's turn, the timing of the push, the landing, falls.
+#[derive(Debug, Clone)]
+pub struct FlipTracker {
+    pusher_machine: Option<usize>,
+    acrobat_machine: Option<usize>,
+    abdomen: usize,
+    pelvis: usize,
+    a0: f64,
+    airborne: bool,
+    k: u64,
+    out: FlipOutcome,
+}
+
+impl FlipTracker {
+    /// Starts at the character's present state; `None` unless it has two models and the first has an
+    /// abdomen and a pelvis.
+    pub fn new(c: &Character) -> Option<Self> {
+        if c.env.sensors.len() < 2 {
+            return None;
+        }
+        let machine = |name: &str| c.controller.machine_index(name);
+        let s0 = &c.env.sensors[0];
+        let (abdomen, pelvis) = (s0.layout.abdomen?, s0.layout.pelvis?);
+        Some(Self {
+            pusher_machine: machine("B-PUSHER"),
+            acrobat_machine: machine("B-ACRO-BODY"),
+            abdomen,
+            pelvis,
+            a0: s0.body_angle[abdomen],
+            airborne: false,
+            k: 0,
+            out: FlipOutcome {
+                max_rotation: 0.0,
+                final_rotation: 0.0,
+                foot_on_hands_at: None,
+                push_at: None,
+                acrobat_e6_at: None,
+                landed_at: None,
+                max_pelvis_height: f64::NEG_INFINITY,
+                final_pelvis_height: 0.0,
+                touched_down: false,
+                pusher_fell: false,
+                standing: false,
+                iterations: 0,
+            },
+        })
+    }
+
+    /// Takes in the state after a control step; `true` when the acrobat touched down with a body other
+    /// than a foot (or went non-finite), which ends the evaluation.
+    pub fn observe(&mut self, c: &Character) -> bool {
+        let k = self.k;
+        self.k += 1;
+        let out = &mut self.out;
+        out.iterations = k + 1;
+        let (a, p) = (&c.env.sensors[0], &c.env.sensors[1]);
+        let state = |m: Option<usize>| m.and_then(|m| c.controller.machines()[m].current_state());
+        if out.foot_on_hands_at.is_none() && anima_body::sensors::catalogue::foot_on_hands(a, p) > 0.0 {
+            out.foot_on_hands_at = Some(k);
+        }
+        if out.push_at.is_none() && state(self.pusher_machine) == Some(2) {
+            out.push_at = Some(k);
+        }
+        if out.acrobat_e6_at.is_none() && state(self.acrobat_machine) == Some(5) {
+            out.acrobat_e6_at = Some(k);
+        }
+        let rot = a.facing * (a.body_angle[self.abdomen] - self.a0);
+        out.max_rotation = out.max_rotation.max(rot);
+        out.final_rotation = rot;
+        out.max_pelvis_height = out.max_pelvis_height.max(a.body_position[self.pelvis][1]);
+        out.final_pelvis_height = a.body_position[self.pelvis][1];
+        if out.acrobat_e6_at.is_some() && a.on_ground.iter().all(|g| !g) {
+            self.airborne = true;
+        }
+        let down = |s: &anima_body::Sensors| {
+            let feet = s.layout.feet;
+            s.on_ground.iter().enumerate().any(|(b, &g)| g && !feet.contains(&Some(b)))
+        };
+        out.touched_down |= down(a);
+        out.pusher_fell |= down(p);
+        if self.airborne && out.landed_at.is_none() && a.support == anima_body::Support::Both {
+            out.landed_at = Some(k);
+        }
+        if out.touched_down || !a.all_finite() || !p.all_finite() {
+            out.touched_down |= !a.all_finite();
+            return true;
+        }
+        false
+    }
+
+    /// The outcome with the character as it is now: standing is judged on the final state.
+    pub fn outcome(&self, c: &Character) -> FlipOutcome {
+        let mut out = self.out;
+        let a = &c.env.sensors[0];
+        let upright = (out.final_rotation - 2.0 * std::f64::consts::PI).abs() < 0.5;
+        out.standing = !out.touched_down
+            && out.landed_at.is_some()
+            && a.support == anima_body::Support::Both
+            && upright
+            && out.final_pelvis_height > 0.7;
+        out
+    }
+}
+
 /// Runs the backflip for `iterations` control steps; `observe` sees the character after each.
 pub fn backflip(
     controller: Controller,
@@ -527,70 +706,13 @@ pub fn backflip(
     mut observe: impl FnMut(&Character),
 ) -> Result<FlipOutcome, CharacterError> {
     let mut c = backflip_character(controller, spacing)?;
-    let machine = |c: &Character, name: &str| c.controller.machine_index(name);
-    let (pm, am) = (machine(&c, "B-PUSHER"), machine(&c, "B-ACRO-BODY"));
-    let s0 = &c.env.sensors[0];
-    let abdomen = s0.layout.abdomen.expect("the acrobat has an abdomen");
-    let pelvis = s0.layout.pelvis.expect("the acrobat has a pelvis");
-    let a0 = s0.body_angle[abdomen];
-    let mut out = FlipOutcome {
-        max_rotation: 0.0,
-        final_rotation: 0.0,
-        foot_on_hands_at: None,
-        push_at: None,
-        acrobat_e6_at: None,
-        landed_at: None,
-        max_pelvis_height: f64::NEG_INFINITY,
-        final_pelvis_height: 0.0,
-        touched_down: false,
-        pusher_fell: false,
-        standing: false,
-        iterations: 0,
-    };
-    let mut airborne = false;
-    for k in 0..iterations {
+    let mut tracker = FlipTracker::new(&c).expect("the acrobat has an abdomen and a pelvis");
+    for _ in 0..iterations {
         c.step()?;
-        out.iterations = k + 1;
         observe(&c);
-        let (a, p) = (&c.env.sensors[0], &c.env.sensors[1]);
-        let state = |m: Option<usize>| m.and_then(|m| c.controller.machines()[m].current_state());
-        if out.foot_on_hands_at.is_none() && anima_body::sensors::catalogue::foot_on_hands(a, p) > 0.0 {
-            out.foot_on_hands_at = Some(k);
-        }
-        if out.push_at.is_none() && state(pm) == Some(2) {
-            out.push_at = Some(k);
-        }
-        if out.acrobat_e6_at.is_none() && state(am) == Some(5) {
-            out.acrobat_e6_at = Some(k);
-        }
-        let rot = a.facing * (a.body_angle[abdomen] - a0);
-        out.max_rotation = out.max_rotation.max(rot);
-        out.final_rotation = rot;
-        out.max_pelvis_height = out.max_pelvis_height.max(a.body_position[pelvis][1]);
-        out.final_pelvis_height = a.body_position[pelvis][1];
-        if out.acrobat_e6_at.is_some() && a.on_ground.iter().all(|g| !g) {
-            airborne = true;
-        }
-        let down = |s: &anima_body::Sensors| {
-            let feet = s.layout.feet;
-            s.on_ground.iter().enumerate().any(|(b, &g)| g && !feet.contains(&Some(b)))
-        };
-        out.touched_down |= down(a);
-        out.pusher_fell |= down(p);
-        if airborne && out.landed_at.is_none() && a.support == anima_body::Support::Both {
-            out.landed_at = Some(k);
-        }
-        if out.touched_down || !a.all_finite() || !p.all_finite() {
-            out.touched_down |= !a.all_finite();
+        if tracker.observe(&c) {
             break;
         }
     }
-    let a = &c.env.sensors[0];
-    let upright = (out.final_rotation - 2.0 * std::f64::consts::PI).abs() < 0.5;
-    out.standing = !out.touched_down
-        && out.landed_at.is_some()
-        && a.support == anima_body::Support::Both
-        && upright
-        && out.final_pelvis_height > 0.7;
-    Ok(out)
+    Ok(tracker.outcome(&c))
 }

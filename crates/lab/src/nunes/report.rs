@@ -11,9 +11,12 @@ use std::time::Instant;
 
 use crate::nunes::{self, WalkRules};
 use crate::repo::Repo;
+use anima_scene::optimisation::{LoadedOptimisation, OptimisationSpec};
+
+use crate::optimise::Resumed;
 use crate::report::Document;
-use anima_control::optimise::{GreedySearch, Interval, Objective, Optimiser, RunLog, Stage, resume, run};
-use anima_control::{Controller, Selection};
+use anima_control::optimise::{Objective, Optimiser, RunLog};
+use anima_control::{Controller, ParamId};
 use anyhow::{Context, Result, bail};
 
 /// Seed of every thesis run (the thesis reports none, spec §9).
@@ -23,8 +26,8 @@ fn log_path(repo: &Repo, run: &str) -> PathBuf {
     repo.cache(format!("nunes/{run}.log.ron"))
 }
 
-/// Runs `opt` to `budget` evaluations, one generation at a time: a stderr line per generation, the log
-/// written after each, resumed from an earlier log of the same run.
+/// Runs `opt` to `budget` evaluations with [`crate::optimise::optimise_logged`], logging to
+/// `target/anima-lab/nunes/<run>.log.ron`: a stderr line per generation.
 pub fn optimise_logged<O: Optimiser + ?Sized>(
     repo: &Repo,
     run_name: &str,
@@ -33,41 +36,36 @@ pub fn optimise_logged<O: Optimiser + ?Sized>(
     budget: usize,
 ) -> Result<RunLog> {
     let path = log_path(repo, run_name);
-    let mut log = RunLog::default();
-    if let Ok(text) = std::fs::read_to_string(&path) {
-        let old: RunLog = ron::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-        match resume(opt, &old) {
-            Ok(()) => {
-                eprintln!("{run_name}: resuming after {} logged evaluations ({})", old.len(), path.display());
-                log = old;
-            }
-            Err(e) => eprintln!("{run_name}: not resuming from {} ({e}); starting over", path.display()),
+    crate::optimise::optimise_logged(opt, objective, budget, &path, |log, resumed| match resumed {
+        Resumed::From(n) => {
+            eprintln!("{run_name}: resuming after {n} logged evaluations ({})", path.display())
         }
-    }
-    std::fs::create_dir_all(path.parent().expect("log folder"))?;
-    while log.len() < budget {
-        let before = log.len();
-        run(opt, objective, before + 1, &mut log);
-        if log.len() == before {
-            break;
+        Resumed::Refused(e) => {
+            eprintln!("{run_name}: not resuming from {} ({e}); starting over", path.display())
         }
-        let best = log.best().map_or(f64::NAN, |e| e.fitness);
-        let new = &log.evaluations[before..];
-        let fs: Vec<String> = new.iter().map(|e| format!("{:.3}", e.fitness)).collect();
-        let shown = if fs.len() > 8 {
-            format!("{} … ({} values)", fs[..8].join(" "), fs.len())
-        } else {
-            fs.join(" ")
-        };
-        eprintln!(
-            "{run_name}: generation {:3} stage {} evaluations {:4}: {shown}  best {best:.3}",
-            log.generations - 1,
-            new[0].stage + 1,
-            log.len()
-        );
-        std::fs::write(&path, ron::ser::to_string_pretty(&log, ron::ser::PrettyConfig::default())?)?;
-    }
-    Ok(log)
+        Resumed::No => {
+            let best = log.best().map_or(f64::NAN, |e| e.fitness);
+            let first = log.evaluations.iter().position(|e| e.generation + 1 == log.generations).unwrap_or(0);
+            let new = &log.evaluations[first..];
+            let fs: Vec<String> = new.iter().map(|e| format!("{:.3}", e.fitness)).collect();
+            let shown = if fs.len() > 8 {
+                format!("{} … ({} values)", fs[..8].join(" "), fs.len())
+            } else {
+                fs.join(" ")
+            };
+            eprintln!(
+                "{run_name}: generation {:3} stage {} evaluations {:4}: {shown}  best {best:.3}",
+                log.generations - 1,
+                new[0].stage + 1,
+                log.len()
+            );
+        }
+    })
+}
+
+/// One of the thesis's optimisation specs, `assets/optimisations/<name>.ron`, with its controller.
+pub fn thesis_spec(repo: &Repo, name: &str) -> Result<LoadedOptimisation> {
+    Ok(anima_scene::load_optimisation(&repo.assets(format!("optimisations/{name}.ron")))?)
 }
 
 /// The Nunes experiments of `docs/reproduction/nunes-results.md`, in its order.
@@ -103,17 +101,11 @@ pub fn reproduce(repo: &Repo, which: &str) -> Result<()> {
     repo.write_report("reproduction/nunes-results.md", &doc)
 }
 
-/// The walking controller with the four sensor thresholds set to `x`.
-fn walker(base: &Controller, x: &[f64]) -> Controller {
+/// `base` with its parameters `ids` set to `x`.
+fn with_values(base: &Controller, ids: &[ParamId], x: &[f64]) -> Controller {
     let mut c = base.clone();
-    let ids = c.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
-    c.apply(&ids, x);
+    c.apply(ids, x);
     c
-}
-
-/// The walking fitness of §7.6: 1000 iterations, 0 after a fall or a stop.
-pub fn walk_fitness(base: &Controller, x: &[f64]) -> f64 {
-    nunes::walk(walker(base, x), 1000, &WalkRules::default(), &[], |_| ()).map_or(0.0, |o| o.fitness())
 }
 
 /// How far a controller gets in a long run (stops at the first fall; no stop test).
@@ -122,31 +114,24 @@ fn long_run(c: Controller, iterations: u64) -> Result<nunes::WalkOutcome> {
     Ok(nunes::walk(c, iterations, &rules, &[], |_| ())?)
 }
 
-/// The thesis's two walking stages (spec §8.1.4): 15 global draws, then 30 one-parameter draws over the
-/// whole interval, over `n` parameters.
-pub fn walk_stages(n: usize) -> Vec<Stage> {
-    let all: Vec<usize> = (0..n).collect();
-    vec![Stage::global("global", all.clone(), 15), Stage::local_single("single", all, 30, Interval::Fixed)]
-}
-
 /// The thesis's main walking experiment (spec §8.1.4–§8.1.6): 15 global + 30 one-parameter
 /// evaluations of the greedy search over p2, p3, p5, p6 ∈ [−0.25, 0.75].
 fn walk(repo: &Repo) -> Result<String> {
-    let base = nunes::controller("walk")?;
-    let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
-    let space = base.space(&ids);
+    let loaded = thesis_spec(repo, "walk")?;
+    let (spec, base) = (&loaded.spec, &loaded.controller);
+    let ids = base.free_params(&spec.parameters);
     let x0 = base.values_of(&ids);
-    let mut opt = GreedySearch::new(space, walk_stages(ids.len()), x0.clone(), SEED)?;
-    let objective = |x: &[f64]| walk_fitness(&base, x);
-    let log = optimise_logged(repo, "walk-greedy", &mut opt, &objective, 46)?;
+    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
+    let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
 
-    let before = long_run(walker(&base, &x0), 1000)?;
+    let before = long_run(with_values(base, &ids, &x0), 1000)?;
     let best = log.best().context("empty log")?;
-    let after = nunes::walk(walker(&base, &best.x), 1000, &WalkRules::default(), &[], |_| ())?;
-    let long = long_run(walker(&base, &best.x), 20_000)?;
+    let after = nunes::walk(with_values(base, &ids, &best.x), 1000, &WalkRules::default(), &[], |_| ())?;
+    let long = long_run(with_values(base, &ids, &best.x), 20_000)?;
 
     // The optimised controller as an asset.
-    let winner = walker(&base, &best.x);
+    let winner = with_values(base, &ids, &best.x);
     let header = format!(
         "// The walking controller after the thesis's optimisation (spec §8.1.4): `cargo xtask reproduce\n\
          // nunes-walk`, greedy search, 15 global + 30 one-parameter evaluations, seed {SEED}; the winner's\n\
@@ -243,16 +228,21 @@ fn walk_variants(repo: &Repo) -> Result<String> {
             "falls before 1000 iterations",
         ),
     ];
+    let walk = thesis_spec(repo, "walk")?;
     for (name, text, run_name, thesis_fit, thesis_long) in variants {
-        let base = nunes::controller(text)?;
-        let ids = base.free_params(&Selection::machines(&["W-LEGS"], anima_control::Scope::Both));
+        // The thesis's walking search on the variant's controller.
+        let loaded = LoadedOptimisation {
+            spec: OptimisationSpec { name: run_name.into(), ..walk.spec.clone() },
+            controller: nunes::controller(text)?,
+        };
+        let (spec, base) = (&loaded.spec, &loaded.controller);
+        let ids = base.free_params(&spec.parameters);
         let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
-        let x0 = base.values_of(&ids);
-        let mut opt = GreedySearch::new(base.space(&ids), walk_stages(ids.len()), x0, SEED)?;
-        let objective = |x: &[f64]| walk_fitness(&base, x);
-        let log = optimise_logged(repo, run_name, &mut opt, &objective, 46)?;
+        let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+        let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
+        let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
         let best = log.best().context("empty log")?;
-        let long = long_run(walker(&base, &best.x), 20_000)?;
+        let long = long_run(with_values(base, &ids, &best.x), 20_000)?;
         let _ = writeln!(
             s,
             "| {name} | {} | {thesis_fit} | {:.3} | {thesis_long} | {:.1} m{} |",
@@ -269,47 +259,18 @@ fn walk_variants(repo: &Repo) -> Result<String> {
     Ok(s)
 }
 
-/// The throw's fitness, Eq. 6.1 (spec §7.6) with anima's [RECON] cap on the height term
-/// (`nunes::throw_height_cap`; `None` for the literal Eq. 6.1).
-pub fn throw_fitness(base: &Controller, ids: &[anima_control::ParamId], x: &[f64], cap: Option<f64>) -> f64 {
-    let mut c = base.clone();
-    c.apply(ids, x);
-    nunes::throw(c, &nunes::BASKET, 2000, |_| ()).map_or(0.0, |o| o.fitness_capped(cap))
-}
-
-/// The thesis's throw stage (spec §8.3.2): `evaluations` draws, each modifying either (s1, e1) or
-/// (s2, e2, τ2), chosen at random, in a window of ±25 % of the interval centred on the current value.
-pub fn throw_stage(base: &Controller, ids: &[anima_control::ParamId], evaluations: usize) -> Stage {
-    let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
-    let group = |names: &[&str]| -> Vec<usize> {
-        names.iter().map(|n| labels.iter().position(|l| l.contains(n)).expect("throw parameter")).collect()
-    };
-    let groups = vec![group(&["E1/shoulder_l", "E1/elbow_l"]), group(&["E2/shoulder_l", "E2/elbow_l", "T2"])];
-    Stage {
-        name: "local".into(),
-        dims: (0..ids.len()).collect(),
-        evaluations,
-        modifier: anima_control::optimise::Modifier::LocalSubset {
-            groups,
-            choice: anima_control::optimise::GroupChoice::Random,
-            interval: Interval::PartiallyReduced { fraction: 0.5 },
-        },
-        batch: 1,
-    }
-}
-
 /// The thesis's throw optimisation (spec §8.3.2): 400 evaluations, each modifying either (s1, e1)
 /// or (s2, e2, τ2) in a window of ±25 % of the interval centred on the current value.
 fn throw(repo: &Repo) -> Result<String> {
-    let base = nunes::controller("throw")?;
-    let ids = base.free_params(&Selection::all());
+    let loaded = thesis_spec(repo, "throw")?;
+    let (spec, base) = (&loaded.spec, &loaded.controller);
+    let ids = base.free_params(&spec.parameters);
     let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
-    let space = base.space(&ids);
     let x0 = base.values_of(&ids);
-    let mut opt = GreedySearch::new(space, vec![throw_stage(&base, &ids, 400)], x0.clone(), SEED)?;
+    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
+    let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
-    let objective = |x: &[f64]| throw_fitness(&base, &ids, x, cap);
-    let log = optimise_logged(repo, "throw-greedy-capped", &mut opt, &objective, 401)?;
     let best = log.best().context("empty log")?;
     let outcome = |x: &[f64]| -> Result<nunes::ThrowOutcome> {
         let mut c = base.clone();

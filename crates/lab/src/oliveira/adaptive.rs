@@ -135,7 +135,7 @@ fn build(repo: &Repo, test: &Test, kind: Kind, implicit: Option<f64>) -> Result<
     };
     // The 9 × 9 and 13 × 13 meshes come from the coarse file with another grid.
     let file_n = if n == 17 { 17 } else { 5 };
-    let mut loaded = anima_scene::oliveira::load(&test.scene_path(repo, file_n))?;
+    let mut loaded = anima_scene::load_oliveira(&test.scene_path(repo, file_n))?;
     loaded.scene.cloth.vertices_per_side = n;
     loaded.scene.cloth.tracked_vertex = (0, 0);
     let beta = match kind {

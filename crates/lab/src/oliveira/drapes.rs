@@ -54,7 +54,7 @@ struct Run {
 /// Runs one scene to its end, writing the per-step log to `log` when given.
 fn run_scene(repo: &Repo, test: &Test, n: usize, label: &'static str, log: Option<&Path>) -> Result<Run> {
     let path = test.scene_path(repo, n);
-    let loaded = anima_scene::oliveira::load(&path)?;
+    let loaded = anima_scene::load_oliveira(&path)?;
     let cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
     let mut cloth = unremeshed(cloth, loaded.scene.gravity_m_s2);
     let duration = loaded.scene.duration_s;

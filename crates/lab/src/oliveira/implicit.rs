@@ -65,7 +65,7 @@ struct Outcome {
 
 fn build(repo: &Repo, d: &Drape, m: &Method) -> Result<AdaptiveCloth> {
     let path = d.scene_path(repo, 17);
-    let mut loaded = anima_scene::oliveira::load(&path)?;
+    let mut loaded = anima_scene::load_oliveira(&path)?;
     loaded.scene.integrator = m.integrator;
     loaded.scene.time_step = m.rule;
     loaded.scene.options.strain_limit = m.strain_limit;

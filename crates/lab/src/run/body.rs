@@ -1,37 +1,23 @@
-//! Running a body scene (`BodyScene(…)` RON, e.g. `assets/scenes/stand.ron`): the control-step loop,
-//! box-figure frames as PNG (left limbs green, right limbs red, as in Nunes 2006), a contact sheet
-//! and a JSON summary.
+//! Running articulated figures: body scenes (`BodyScene(…)`, figures holding poses, e.g.
+//! `assets/scenes/stand.ron`) and character scenes (`CharacterScene(…)`, figures driven by a controller,
+//! e.g. `assets/scenes/walk.ron`). One loop for both: box-figure frames as PNG (left limbs green, right
+//! limbs red, as in Nunes 2006), a contact sheet, per-model numbers, and for characters the thesis's
+//! evaluation when the scene asks for one.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-use anima_body::{BodyPose, BodyScene, Sensors, Shape, Side, Skeleton, SkeletonSource, World};
+use anima_body::{BodyError, BodyPose, Sensors, Shape, Side, Skeleton, World};
+use anima_character::{Character, procedures};
+use anima_scene::body::LoadedBody;
+use anima_scene::character::{Evaluation, LoadedCharacter};
 use anima_viz::{Image, View2d, fill_disc, fill_polygon, stroke_polygon};
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use serde::Serialize;
 
+use super::{Detail, Progress, RunOptions, Summary};
+use crate::nunes::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
-
-/// Whether the file at `path` is a body scene: a `.ron` whose top-level value is `BodyScene(…)`. The
-/// FLEX3D RON scenes start with their own struct, so the two never clash and neither is parsed twice.
-pub fn is_body_scene_file(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron"))
-        && std::fs::read_to_string(path).is_ok_and(|t| BodyScene::is_body_scene(&t))
-}
-
-/// What a body run writes and shows.
-#[derive(Debug, Clone)]
-pub struct BodyRunOptions {
-    /// Folder for frames and pictures; `None` writes nothing.
-    pub out_dir: Option<PathBuf>,
-    /// Write `frame_<k>.png` for every frame, `final.png` and the `frames.png` sheet.
-    pub pictures: bool,
-    /// Overrides of the scene's step and duration, seconds.
-    pub dt: Option<f64>,
-    pub duration: Option<f64>,
-    /// Show progress on standard error.
-    pub progress: bool,
-}
 
 /// Per-model numbers of a run.
 #[derive(Debug, Clone, Serialize)]
@@ -83,69 +69,184 @@ fn hip_height_pitch(s: &Sensors, (body, offset): (usize, [f64; 2])) -> (f64, f64
     (s.body_position[body][1] + sin * offset[0] + cos * offset[1], th)
 }
 
-/// The JSON summary of a body run.
+/// The numbers of a run of figures.
 #[derive(Debug, Clone, Serialize)]
-pub struct BodySummary {
-    pub scene: String,
+pub struct BodyDetail {
     pub dt: f64,
     pub substeps: u32,
     pub solver_iterations: u32,
-    pub steps: u64,
-    pub frames: usize,
-    pub simulated_seconds: f64,
-    /// Wall time of the step loop, and the part of it spent drawing frames.
-    pub wall_seconds: f64,
+    /// The part of the wall time spent drawing frames, s.
     pub picture_seconds: f64,
+    /// Control steps per second of wall time, the pictures' time left out.
     pub steps_per_second: f64,
-    pub all_finite: bool,
-    /// The error that stopped the run, if any.
-    pub diverged: Option<String>,
     pub models: Vec<ModelSummary>,
+    /// A character scene's evaluation, when it asks for one.
+    pub evaluation: Option<EvaluationOutcome>,
 }
 
-/// Reads a body scene and every skeleton file it names (relative to the scene's folder).
-pub fn load(path: &Path) -> Result<(BodyScene, Vec<Skeleton>)> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let scene = BodyScene::from_ron_str(&text).with_context(|| format!("{}", path.display()))?;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let mut skeletons = Vec::with_capacity(scene.models.len());
-    for entry in &scene.models {
-        let sk = match &entry.skeleton {
-            SkeletonSource::Builtin(b) => b.load(),
-            SkeletonSource::File(f) => {
-                let p = dir.join(f);
-                let t = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-                Skeleton::from_ron_str(&t).with_context(|| format!("{}", p.display()))?
-            }
-        };
-        skeletons.push(sk);
-    }
-    Ok((scene, skeletons))
+/// What a character scene's evaluation measured.
+#[derive(Debug, Clone, Serialize)]
+pub enum EvaluationOutcome {
+    Walk(WalkOutcome),
+    Throw(ThrowOutcome),
+    Backflip { outcome: FlipOutcome, flipped: bool },
 }
 
-/// Runs a loaded body scene.
-pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> Result<BodySummary> {
-    let mut scene = scene.clone();
-    if let Some(dt) = opts.dt {
-        if !(dt > 0.0 && dt.is_finite()) {
-            bail!("--dt must be a positive number of seconds, found {dt}");
-        }
-        scene.world.dt = dt;
+/// Figures a run steps: a world with its own sensor readings (body scenes), or a character whose
+/// controller senses (character scenes).
+trait Figures {
+    fn world(&self) -> &World;
+    fn sensors(&self) -> &[Sensors];
+    /// One control step, the sensors read afterwards.
+    fn step(&mut self) -> Result<(), BodyError>;
+}
+
+struct Posed {
+    world: World,
+    sensors: Vec<Sensors>,
+}
+
+impl Figures for Posed {
+    fn world(&self) -> &World {
+        &self.world
     }
-    if let Some(d) = opts.duration {
-        if !(d > 0.0 && d.is_finite()) {
-            bail!("--duration must be a positive number of seconds, found {d}");
-        }
-        scene.duration = d;
+    fn sensors(&self) -> &[Sensors] {
+        &self.sensors
     }
-    let mut world = scene.build(skeletons)?;
-    let n_models = world.n_models();
+    fn step(&mut self) -> Result<(), BodyError> {
+        self.world.step()?;
+        for s in &mut self.sensors {
+            self.world.sense(s)?;
+        }
+        Ok(())
+    }
+}
+
+impl Figures for Character {
+    fn world(&self) -> &World {
+        &self.env.world
+    }
+    fn sensors(&self) -> &[Sensors] {
+        &self.env.sensors
+    }
+    fn step(&mut self) -> Result<(), BodyError> {
+        Character::step(self)
+    }
+}
+
+/// Runs a body scene: every model holds its pose.
+pub fn run_body(
+    loaded: &LoadedBody,
+    label: &str,
+    opts: &RunOptions,
+    progress: &mut dyn Progress,
+) -> Result<Summary> {
+    let scene = &loaded.scene;
+    let world = scene.build(&loaded.skeletons)?;
     let mut sensors: Vec<Sensors> =
-        (0..n_models).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
+        (0..world.n_models()).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
+    for s in &mut sensors {
+        world.sense(s)?;
+    }
+    let mut figures = Posed { world, sensors };
+    let n_steps = scene.n_steps();
+    run_figures(&mut figures, label, n_steps, scene.frame_interval, opts, progress, |_| false)
+}
+
+/// Runs a character scene: the controller drives the models; the scene's evaluation, if any, is taken
+/// over the run (until it ends the evaluation, after which the figures run on to the end).
+pub fn run_character(
+    loaded: &LoadedCharacter,
+    label: &str,
+    opts: &RunOptions,
+    progress: &mut dyn Progress,
+) -> Result<Summary> {
+    let scene = &loaded.scene;
+    let mut world = World::new(scene.world)?;
+    for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
+        world.add_model(sk, m.placement)?;
+    }
+    let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
+    let mut c = Character::new(world, loaded.controller.clone(), procedures(), &aliases)?;
+    enum Tracker {
+        None,
+        Walk(nunes::WalkTracker),
+        Throw(nunes::ThrowTracker),
+        Flip(nunes::FlipTracker),
+    }
+    let mut tracker = match scene.evaluation {
+        Evaluation::None => Tracker::None,
+        Evaluation::Walk => {
+            let rules = nunes::WalkRules { window: 0, stop_on_failure: true, ..nunes::WalkRules::default() };
+            Tracker::Walk(nunes::WalkTracker::new(&c, &rules))
+        }
+        Evaluation::Throw => match nunes::ThrowTracker::new(&c, &nunes::BASKET)? {
+            Some(t) => Tracker::Throw(t),
+            None => anyhow::bail!("{label}: a throw evaluation needs a body `ball` on the first model"),
+        },
+        Evaluation::Backflip => match nunes::FlipTracker::new(&c) {
+            Some(t) => Tracker::Flip(t),
+            None => anyhow::bail!(
+                "{label}: a backflip evaluation needs two models, the first with an abdomen and a pelvis"
+            ),
+        },
+    };
+    // The outcome is taken when the evaluation ends (a fall ends a walk), as the thesis's evaluators do.
+    let outcome_of = |tracker: &Tracker, c: &Character| match tracker {
+        Tracker::None => None,
+        Tracker::Walk(t) => Some(EvaluationOutcome::Walk(t.outcome(c))),
+        Tracker::Throw(t) => Some(EvaluationOutcome::Throw(t.outcome())),
+        Tracker::Flip(t) => {
+            let outcome = t.outcome(c);
+            Some(EvaluationOutcome::Backflip { outcome, flipped: outcome.flipped() })
+        }
+    };
+    let mut evaluation = None;
+    let mut summary = run_figures(
+        &mut c,
+        label,
+        scene.n_steps(),
+        scene.frame_interval,
+        opts,
+        progress,
+        |c: &Character| {
+            if evaluation.is_none() {
+                let over = match &mut tracker {
+                    Tracker::None => false,
+                    Tracker::Walk(t) => t.observe(c),
+                    Tracker::Throw(t) => t.observe(c),
+                    Tracker::Flip(t) => t.observe(c),
+                };
+                if over {
+                    evaluation = outcome_of(&tracker, c);
+                }
+            }
+            false
+        },
+    )?;
+    let evaluation = evaluation.or_else(|| outcome_of(&tracker, &c));
+    if let Detail::Body(d) = &mut summary.detail {
+        d.evaluation = evaluation;
+    }
+    Ok(summary)
+}
+
+/// The one loop over figures: `after_step` sees them after every step and may stop the run.
+fn run_figures<F: Figures>(
+    figures: &mut F,
+    label: &str,
+    n_steps: u64,
+    frame_interval: f64,
+    opts: &RunOptions,
+    progress: &mut dyn Progress,
+    mut after_step: impl FnMut(&F) -> bool,
+) -> Result<Summary> {
+    let world = figures.world();
+    let settings = *world.settings();
+    let n_models = world.n_models();
     let mut stats: Vec<ModelSummary> = Vec::with_capacity(n_models);
     let mut hips = Vec::with_capacity(n_models);
-    for (m, s) in sensors.iter_mut().enumerate() {
-        world.sense(s)?;
+    for (m, s) in figures.sensors().iter().enumerate() {
         let sk = world.skeleton(m)?;
         let hip = hip_reference(sk, s);
         hips.push(hip);
@@ -170,13 +271,11 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
             max_abs_hip_pitch_rad: hip_pitch.abs(),
         });
     }
-
-    let n_steps = scene.n_steps();
-    let frame_every = ((scene.frame_interval / scene.world.dt).round() as u64).max(1);
-    let view = view_for(&world)?;
+    let frame_every = ((frame_interval / settings.dt).round() as u64).max(1);
+    let view = view_for(world)?;
     let mut frames: Vec<Image> = Vec::new();
     let mut poses = Vec::new();
-    let out = opts.out_dir.as_deref().filter(|_| opts.pictures);
+    let out = opts.picture_dir();
     let mut picture = |world: &World, k: usize, frames: &mut Vec<Image>| -> Result<()> {
         let img = draw(world, &view, &mut poses)?;
         if let Some(dir) = out {
@@ -186,66 +285,66 @@ pub fn run(scene: &BodyScene, skeletons: &[Skeleton], opts: &BodyRunOptions) -> 
         Ok(())
     };
     if out.is_some() {
-        picture(&world, 0, &mut frames)?;
+        picture(world, 0, &mut frames)?;
     }
-
     let mut all_finite = true;
-    let mut diverged = None;
+    let mut error = None;
     let mut picture_seconds = 0.0;
+    progress.begin(n_steps);
     let started = Instant::now();
     let mut steps = 0;
     for k in 1..=n_steps {
-        if let Err(e) = world.step() {
+        if let Err(e) = figures.step() {
             all_finite = false;
-            diverged = Some(e.to_string());
+            error = Some(e.to_string());
             break;
         }
         steps = k;
-        for (m, s) in sensors.iter_mut().enumerate() {
-            world.sense(s)?;
+        for (m, s) in figures.sensors().iter().enumerate() {
             all_finite &= s.all_finite();
-            let sk = world.skeleton(m)?;
-            update_stats(&mut stats[m], s, sk, hips[m]);
+            update_stats(&mut stats[m], s, figures.world().skeleton(m)?, hips[m]);
         }
         if out.is_some() && k % frame_every == 0 {
             let t0 = Instant::now();
-            picture(&world, frames.len(), &mut frames)?;
+            picture(figures.world(), frames.len(), &mut frames)?;
             picture_seconds += t0.elapsed().as_secs_f64();
         }
-        if opts.progress && k % (n_steps / 20).max(1) == 0 {
-            eprint!("\ranima: {:>3}% ({k}/{n_steps} steps)", 100 * k / n_steps);
+        if k % (n_steps / 100).max(1) == 0 {
+            progress.advance(k);
+        }
+        if after_step(figures) {
+            break;
         }
     }
     let wall_seconds = started.elapsed().as_secs_f64();
+    progress.end();
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
-    if opts.progress {
-        eprintln!();
+    if let Some(dir) = out
+        && let Some(last) = frames.last()
+    {
+        let tiles: Vec<Image> = sheet_indices(frames.len(), 9).iter().map(|&i| frames[i].clone()).collect();
+        crate::picture::write_final_and_sheet(dir, last, &tiles, 3)?;
     }
-    if let Some(dir) = out {
-        if let Some(last) = frames.last() {
-            write_png(&dir.join("final.png"), last)?;
-        }
-        let pick = sheet_indices(frames.len(), 9);
-        let tiles: Vec<Image> = pick.iter().map(|&i| frames[i].clone()).collect();
-        if !tiles.is_empty() {
-            write_png(&dir.join("frames.png"), &Image::grid(&tiles, 3, 6, [255, 255, 255])?)?;
-        }
-    }
-    Ok(BodySummary {
-        scene: scene.name.clone(),
-        dt: scene.world.dt,
-        substeps: scene.world.substeps,
-        solver_iterations: scene.world.solver.iterations,
+    Ok(Summary {
+        scene: label.to_owned(),
+        kind: "figures",
         steps,
         frames: frames.len(),
-        simulated_seconds: steps as f64 * scene.world.dt,
+        simulated_seconds: steps as f64 * settings.dt,
         wall_seconds,
-        picture_seconds,
-        // Stepping and sensing every model each step; the pictures' time is left out.
-        steps_per_second: steps as f64 / sim_seconds,
         all_finite,
-        diverged,
-        models: stats,
+        error,
+        warnings: Vec::new(),
+        detail: Detail::Body(BodyDetail {
+            dt: settings.dt,
+            substeps: settings.substeps,
+            solver_iterations: settings.solver.iterations,
+            picture_seconds,
+            // Stepping and sensing every model each step; the pictures' time is left out.
+            steps_per_second: steps as f64 / sim_seconds,
+            models: stats,
+            evaluation: None,
+        }),
     })
 }
 
@@ -363,96 +462,34 @@ pub fn draw_ground(img: &mut Image, view: &View2d, height: f64) {
     fill_polygon(img, &[(0.0, row), (w, row), (w, h), (0.0, h)], GROUND);
 }
 
-/// Writes the summary as pretty JSON.
-pub fn write_summary(path: &Path, summary: &BodySummary) -> Result<()> {
-    write_atomic(path, |w| Ok(serde_json::to_writer_pretty(w, summary)?))
-}
-
-/// `anima run SCENE` for a body scene: runs it, writes pictures and `summary.json` (or `summary`),
-/// reports on standard error. Exit code 2 when the simulation diverged.
-pub fn run_command(
-    path: &Path,
-    out: &Path,
-    summary: Option<&Path>,
-    opts: BodyRunOptions,
-    quiet: bool,
-) -> Result<std::process::ExitCode> {
-    let (scene, skeletons) = load(path)?;
-    if !quiet {
-        eprintln!(
-            "anima: {} — body scene `{}`: {} models, {} steps of {} s",
-            path.display(),
-            scene.name,
-            scene.models.len(),
-            scene.n_steps(),
-            opts.dt.unwrap_or(scene.world.dt)
-        );
-    }
-    let s = run(&scene, &skeletons, &opts)?;
-    let summary_path = summary.map_or_else(|| out.join("summary.json"), Path::to_path_buf);
-    write_summary(&summary_path, &s)?;
-    if !quiet {
-        for m in &s.models {
-            eprintln!(
-                "anima: {} ({}, G = {}): head lowest {:.3} m, centre of mass moved {:.3} m; \
-                 hip {:.4} m (from {:.4}), pitch {:.2e} rad",
-                m.name,
-                m.pd_mode,
-                m.gain_scale,
-                m.min_head_height,
-                m.max_com_drift,
-                m.hip_height_m,
-                m.initial_hip_height_m,
-                m.hip_pitch_rad
-            );
-        }
-        eprintln!(
-            "anima: {} steps in {:.2} s ({:.0} steps/s); wrote {}",
-            s.steps,
-            s.wall_seconds,
-            s.steps_per_second,
-            summary_path.display()
-        );
-    }
-    if let Some(e) = &s.diverged {
-        eprintln!("anima: error: {e}");
-        return Ok(std::process::ExitCode::from(2));
-    }
-    Ok(std::process::ExitCode::SUCCESS)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::run::Silent;
+    use anima_scene::{LoadOptions, Scene, load};
 
-    fn asset(rel: &str) -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(rel)
+    fn asset(rel: &str) -> std::path::PathBuf {
+        crate::repo::Repo::here().assets(rel)
     }
 
-    #[test]
-    fn body_scenes_are_told_from_flex3d_scenes() {
-        assert!(is_body_scene_file(&asset("assets/scenes/stand.ron")));
-        assert!(is_body_scene_file(&asset("assets/scenes/backflip-pair.ron")));
-        assert!(!is_body_scene_file(&asset("assets/flex3d/curtain.ron")));
-        assert!(!is_body_scene_file(&asset("assets/flex3d/a2-4-cortinas.par")));
+    fn body(rel: &str) -> LoadedBody {
+        match load(&asset(rel), &LoadOptions::default()).unwrap() {
+            Scene::Body(b) => b,
+            other => panic!("{rel}: a body scene, found {:?}", other.kind()),
+        }
     }
 
     #[test]
     fn the_stand_scene_runs_stands_and_writes_frames() {
         let dir = std::env::temp_dir().join(format!("anima-body-run-{}", std::process::id()));
-        let (scene, skeletons) = load(&asset("assets/scenes/stand.ron")).unwrap();
-        let opts = BodyRunOptions {
-            out_dir: Some(dir.clone()),
-            pictures: true,
-            dt: None,
-            duration: Some(4.0),
-            progress: false,
-        };
-        let s = run(&scene, &skeletons, &opts).unwrap();
+        let mut scene = body("scenes/stand.ron");
+        scene.scene.duration = 4.0;
+        let s = run_body(&scene, "stand", &RunOptions::writing_to(&dir), &mut Silent).unwrap();
         assert_eq!(s.steps, 80);
-        assert!(s.all_finite && s.diverged.is_none());
+        assert!(s.all_finite && s.error.is_none());
         assert_eq!(s.frames, 3, "frames at 0, 2 and 4 s");
-        let m = &s.models[0];
+        let Detail::Body(d) = &s.detail else { panic!("figures") };
+        let m = &d.models[0];
         assert!(m.min_head_height > 1.6 && m.only_feet_touched, "{m:?}");
         for f in ["frame_0000.png", "frame_0002.png", "final.png", "frames.png"] {
             let bytes = std::fs::read(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
@@ -463,13 +500,13 @@ mod tests {
 
     #[test]
     fn the_standard_biped_scene_reports_hip_height_and_pitch() {
-        let (scene, skeletons) = load(&asset("assets/scenes/standard-biped.ron")).unwrap();
-        assert_eq!(scene.n_steps(), 10_000, "10 s at 1 ms");
-        let opts =
-            BodyRunOptions { out_dir: None, pictures: false, dt: None, duration: Some(1.0), progress: false };
-        let s = run(&scene, &skeletons, &opts).unwrap();
+        let mut scene = body("scenes/standard-biped.ron");
+        assert_eq!(scene.scene.n_steps(), 10_000, "10 s at 1 ms");
+        scene.scene.duration = 1.0;
+        let s = run_body(&scene, "biped", &RunOptions::quiet(), &mut Silent).unwrap();
         assert_eq!(s.steps, 1000);
-        let m = &s.models[0];
+        let Detail::Body(d) = &s.detail else { panic!("figures") };
+        let m = &d.models[0];
         assert!((m.initial_hip_height_m - 0.95).abs() < 1e-6, "hips start at 0.95 m: {m:?}");
         assert!(m.min_hip_height_m > 0.98 * m.initial_hip_height_m, "{m:?}");
         assert!(m.max_abs_hip_pitch_rad < 0.02 && m.only_feet_touched, "{m:?}");

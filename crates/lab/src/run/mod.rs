@@ -1,5 +1,338 @@
-//! Running a scene to its end: stepping, frames, pictures and a summary, one module per scene kind.
+//! Running a scene to its end: stepping, frames, pictures and a summary, one module per scene kind, one
+//! set of options and one summary for all of them. The `anima run` command is this module's caller;
+//! the tests drive scenes through the same code, so what they check is what a user runs.
 
 pub mod body;
 pub mod flex3d;
+pub mod oliveira;
 pub mod sheet;
+
+use std::path::{Path, PathBuf};
+
+use anima_cloth::flex3d::{ContactApproach, FrictionMode, StaticResponse};
+use anima_cloth::oliveira::StepRule;
+use anima_geom::DVec3;
+use anima_ode::{Integrator, LinearSolver};
+use anima_scene::Scene;
+use anyhow::Result;
+use serde::Serialize;
+
+use crate::output::write_atomic;
+
+/// What a run writes. Nothing is written outside `out_dir`.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Folder for frames, pictures and the summary; `None` writes nothing.
+    pub out_dir: Option<PathBuf>,
+    /// Write a file per frame (`.OBT` and `.obj` for FLEX3D surfaces, `.obj` for cloths; figures are
+    /// pictures).
+    pub frames: bool,
+    /// Also write the initial state as frame 0.
+    pub frame0: bool,
+    /// Render `final.png` and a `frames.png` contact sheet (and, for figures, a picture per frame).
+    pub pictures: bool,
+    /// The linear solver of the implicit integrators (`None`: the integrator's default).
+    pub linear_solver: Option<LinearSolver>,
+    /// Sheet scenes: reference positions (another run's `final.obj`); the summary then reports the RMS
+    /// distance to them.
+    pub reference: Option<Vec<DVec3>>,
+}
+
+impl RunOptions {
+    /// Nothing written: for tests and experiments that only want the numbers.
+    pub fn quiet() -> Self {
+        Self::default()
+    }
+
+    /// Frames and pictures into `dir`.
+    pub fn writing_to(dir: impl Into<PathBuf>) -> Self {
+        Self { out_dir: Some(dir.into()), frames: true, pictures: true, ..Self::default() }
+    }
+
+    /// The folder frames go to, when frames are written.
+    fn frame_dir(&self) -> Option<&Path> {
+        self.out_dir.as_deref().filter(|_| self.frames)
+    }
+
+    /// The folder pictures go to, when pictures are drawn.
+    fn picture_dir(&self) -> Option<&Path> {
+        self.out_dir.as_deref().filter(|_| self.pictures)
+    }
+}
+
+/// What a run tells its caller while it goes: how far it is, and warnings worth reading before the
+/// end (a step beyond the integrator's stability limit). The `anima` command draws a progress bar.
+pub trait Progress {
+    /// The run will take `total` steps (or, for adaptive cloths, `total` milliseconds of simulated time).
+    fn begin(&mut self, total: u64);
+    fn advance(&mut self, done: u64);
+    fn warn(&mut self, message: &str);
+    fn end(&mut self);
+}
+
+/// A [`Progress`] that shows nothing; its warnings end up in the summary only.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Progress for Silent {
+    fn begin(&mut self, _: u64) {}
+    fn advance(&mut self, _: u64) {}
+    fn warn(&mut self, _: &str) {}
+    fn end(&mut self) {}
+}
+
+/// The JSON summary of a run: what every kind reports, then the kind's own numbers.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub kind: &'static str,
+    pub steps: u64,
+    pub frames: usize,
+    pub simulated_seconds: f64,
+    /// Wall time of the step loop (frames and pictures included, start-up not), s.
+    pub wall_seconds: f64,
+    /// Every value stayed finite.
+    pub all_finite: bool,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+    pub warnings: Vec<String>,
+    #[serde(flatten)]
+    pub detail: Detail,
+}
+
+/// The numbers only one kind of scene has.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Detail {
+    Flex3d(flex3d::Flex3dDetail),
+    Sheet(sheet::SheetDetail),
+    Oliveira(oliveira::OliveiraDetail),
+    Body(body::BodyDetail),
+}
+
+/// Writes the summary as pretty JSON, whole.
+pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
+    write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, summary)?;
+        writeln!(w)?;
+        Ok(())
+    })
+}
+
+/// Runs a loaded scene of any kind; `label` names it in the summary.
+pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
+    match scene {
+        Scene::Flex3d(s) => Ok(flex3d::run(s, label, opts, progress)?.0),
+        Scene::Sheet(s) => sheet::run(s, label, opts, progress),
+        Scene::Oliveira(s) => oliveira::run(s, label, opts, progress),
+        Scene::Body(s) => body::run_body(s, label, opts, progress),
+        Scene::Character(s) => body::run_character(s, label, opts, progress),
+    }
+}
+
+/// Frames shown on a contact sheet: nine spread evenly over the run, ending with the last one.
+pub fn sheet_frames(n_frames: usize) -> Vec<usize> {
+    let shown = n_frames.min(9);
+    let mut frames: Vec<usize> = (1..=shown).map(|k| (k * n_frames).div_ceil(shown)).collect();
+    frames.dedup();
+    frames
+}
+
+/// Changes to a loaded scene from the command line, checked once for every kind. A change that does
+/// not apply to the scene's kind is an error, never silently ignored.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub integrator: Option<Integrator>,
+    /// Time step, s (a FLEX3D or sheet step, a cloth's fixed step, a figure's control step).
+    pub dt: Option<f64>,
+    /// Simulated time, s.
+    pub duration: Option<f64>,
+    /// Gravity, m/s² (FLEX3D and Oliveira scenes; FLEX3D `.PAR` scripts take it when loading).
+    pub gravity: Option<DVec3>,
+    pub flex3d: Flex3dSwitches,
+}
+
+/// The FLEX3D reconstructions the thesis leaves open (spec S7.2), each a switch.
+#[derive(Debug, Clone, Default)]
+pub struct Flex3dSwitches {
+    pub friction: Option<FrictionMode>,
+    pub contact: Option<ContactApproach>,
+    pub static_response: Option<StaticResponse>,
+    pub external_is_acceleration: bool,
+    pub bend_reaction: bool,
+    pub friction_clamp: bool,
+    pub no_collisions: bool,
+}
+
+impl Flex3dSwitches {
+    fn any(&self) -> bool {
+        self.friction.is_some()
+            || self.contact.is_some()
+            || self.static_response.is_some()
+            || self.external_is_acceleration
+            || self.bend_reaction
+            || self.friction_clamp
+            || self.no_collisions
+    }
+}
+
+fn positive(what: &str, v: f64) -> Result<f64> {
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        anyhow::bail!("{what} must be a positive number of seconds, found {v}")
+    }
+}
+
+impl Overrides {
+    /// Applies the changes to `scene`, or says which one does not apply to its kind.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        let kind = scene.kind().name();
+        let not_for = |what: &str| anyhow::anyhow!("{what} does not apply to a {kind} scene");
+        let dt = self.dt.map(|d| positive("--dt", d)).transpose()?;
+        let duration = self.duration.map(|d| positive("--duration", d)).transpose()?;
+        if self.flex3d.any() && !matches!(scene, Scene::Flex3d(_)) {
+            return Err(not_for("a FLEX3D switch (--friction, --contact, --static-response, …)"));
+        }
+        match scene {
+            Scene::Flex3d(l) => {
+                let s = &mut l.scene;
+                if let Some(i) = self.integrator {
+                    s.integrator = i;
+                }
+                if let Some(dt) = dt {
+                    s.dt_s = dt;
+                }
+                if let Some(d) = duration {
+                    s.duration_s = d;
+                }
+                if let Some(g) = self.gravity {
+                    s.gravity_m_s2 = g;
+                }
+                let f = &self.flex3d;
+                if let Some(m) = f.friction {
+                    s.friction.mode = m;
+                }
+                if let Some(c) = f.contact {
+                    s.options.contact = c;
+                }
+                if let Some(r) = f.static_response {
+                    s.options.static_response = r;
+                }
+                s.options.external_force_is_acceleration |= f.external_is_acceleration;
+                s.options.bend_reaction |= f.bend_reaction;
+                s.options.friction_clamp |= f.friction_clamp;
+                if f.no_collisions {
+                    s.options.collisions = false;
+                }
+            }
+            Scene::Sheet(s) => {
+                if self.gravity.is_some() {
+                    return Err(not_for(
+                        "--gravity (the standard sheet's gravity is part of its definition)",
+                    ));
+                }
+                if let Some(i) = self.integrator {
+                    s.integrator = i;
+                }
+                if let Some(dt) = dt {
+                    s.dt_s = dt;
+                }
+                if let Some(d) = duration {
+                    s.duration_s = d;
+                }
+            }
+            Scene::Oliveira(l) => {
+                let s = &mut l.scene;
+                if let Some(i) = self.integrator {
+                    s.integrator = i;
+                }
+                if let Some(dt) = dt {
+                    s.time_step = StepRule::Fixed { dt_s: dt };
+                }
+                if let Some(d) = duration {
+                    s.duration_s = d;
+                }
+                if let Some(g) = self.gravity {
+                    s.gravity_m_s2 = g;
+                }
+            }
+            Scene::Body(l) => {
+                if self.integrator.is_some() || self.gravity.is_some() {
+                    return Err(not_for("--integrator or --gravity (a figure's world sets them)"));
+                }
+                if let Some(dt) = dt {
+                    l.scene.world.dt = dt;
+                }
+                if let Some(d) = duration {
+                    l.scene.duration = d;
+                }
+            }
+            Scene::Character(l) => {
+                if self.integrator.is_some() || self.gravity.is_some() {
+                    return Err(not_for("--integrator or --gravity (a figure's world sets them)"));
+                }
+                if let Some(dt) = dt {
+                    l.scene.world.dt = dt;
+                }
+                if let Some(d) = duration {
+                    l.scene.duration = d;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What a step beyond the integrator's stability limit means for the scene at hand, or `None` when
+/// the step is within it. `omega_max` is the scene's highest undamped frequency (rad/s); `damping`
+/// describes the scene's damping ("friction μ = 0.1"), `None` when it has none.
+pub fn stability_warning(
+    integrator: Integrator,
+    dt: f64,
+    omega_max: f64,
+    damping: Option<&str>,
+) -> Option<String> {
+    let limit = anima_ode::stability::stability_limit(integrator);
+    if limit.is_infinite() || omega_max <= 0.0 || dt * omega_max <= limit {
+        return None;
+    }
+    let h_omega = dt * omega_max;
+    let allowed = limit / omega_max;
+    let head = format!(
+        "{integrator} at Δt = {dt:.3e} s: h·ω_max = {h_omega:.3} with ω_max = {omega_max:.3e} rad/s, beyond the \
+         undamped stability limit h·ω ≤ {limit} (Δt ≤ {allowed:.3e} s)"
+    );
+    Some(match damping {
+        None => format!(
+            "{head}; this scene has no damping, so the fastest modes will grow until the run goes non-finite"
+        ),
+        Some(d) => {
+            // Forward Euler on x'' = −ω²x − 2ζωx' is stable exactly when ζ ≥ h·ω/2.
+            let need = if integrator == Integrator::ForwardEuler {
+                format!(
+                    " (forward Euler needs a damping ratio ζ ≥ h·ω/2 = {:.2} on the fastest mode)",
+                    h_omega / 2.0
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "{head}; it stays bounded only if the scene's damping ({d}) removes energy from the fastest modes \
+                 faster than the integrator adds it{need}. The run stops at the first non-finite value"
+            )
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contact_sheet_frames() {
+        assert_eq!(sheet_frames(20), vec![3, 5, 7, 9, 12, 14, 16, 18, 20]);
+        assert_eq!(sheet_frames(4), vec![1, 2, 3, 4]);
+        assert_eq!(sheet_frames(0), Vec::<usize>::new());
+    }
+}

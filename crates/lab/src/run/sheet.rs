@@ -1,6 +1,7 @@
-//! Running a sheet scene (`SheetScene(...)` RON files, such as the standard benchmark sheets).
+//! Running a sheet scene (`SheetScene(…)`, such as the standard benchmark sheets): OBJ frames, pictures
+//! and the summary's numbers.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anima_cloth::network_sim::NetworkSim;
@@ -9,41 +10,20 @@ use anima_geom::{Aabb, DVec3, grid_triangles};
 use anima_ode::{State, StepControl, Stepper, integrate};
 use anima_scene::sheet::SheetScene;
 use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use serde::Serialize;
 
+use super::{Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 
-/// What a sheet run writes.
-#[derive(Debug, Clone)]
-pub struct SheetRunOptions {
-    pub out_dir: Option<PathBuf>,
-    /// An OBJ whose vertices are the reference positions (e.g. another run's `final.obj`).
-    pub reference: Option<PathBuf>,
-    pub write_frames: bool,
-    pub pictures: bool,
-    pub progress: bool,
-    /// Warn when the step is beyond the integrator's stability limit.
-    pub warn_stability: bool,
-    /// The linear solver of the implicit integrators (`None`: conjugate gradients).
-    pub linear_solver: Option<anima_ode::LinearSolver>,
-}
-
-/// The JSON summary of a sheet run.
+/// The numbers of a sheet run.
 #[derive(Debug, Clone, Serialize)]
-pub struct SheetSummary {
-    pub scene: String,
+pub struct SheetDetail {
     pub integrator: String,
     pub dt: f64,
     pub particles: usize,
     pub springs: usize,
-    pub steps: usize,
-    pub frames: usize,
-    pub simulated_seconds: f64,
-    pub wall_seconds: f64,
     pub ns_per_particle_step: f64,
-    pub all_finite: bool,
-    pub error: Option<String>,
     /// Mass-weighted centre of the particles at the end, m.
     pub center_of_mass: [f64; 3],
     /// RMS particle distance to the reference, m (with `--reference`).
@@ -54,67 +34,42 @@ pub struct SheetSummary {
     pub solver_iterations: usize,
 }
 
-/// Reads the vertices of an OBJ file (the `v x y z` lines, in order).
-pub fn read_obj_vertices(path: &Path) -> Result<Vec<DVec3>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
-        let mut parts = line.split_whitespace();
-        if parts.next() != Some("v") {
-            continue;
-        }
-        let nums: Vec<f64> = parts
-            .map(str::parse)
-            .collect::<Result<_, _>>()
-            .with_context(|| format!("{}:{}: expected three numbers after `v`", path.display(), k + 1))?;
-        match nums[..] {
-            [x, y, z, ..] => out.push(DVec3::new(x, y, z)),
-            _ => {
-                bail!("{}:{}: expected three numbers after `v`, found {}", path.display(), k + 1, nums.len())
-            }
-        }
-    }
-    Ok(out)
-}
-
 /// Runs a sheet scene to its end (or to the first failure).
-pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Result<SheetSummary> {
-    if !(scene.dt_s > 0.0 && scene.duration_s > 0.0 && scene.frame_rate_hz > 0.0) {
-        bail!("{label}: dt_s, duration_s and frame_rate_hz must be positive");
+pub fn run(
+    scene: &SheetScene,
+    label: &str,
+    opts: &RunOptions,
+    progress: &mut dyn Progress,
+) -> Result<Summary> {
+    let n = scene.sheet.n * scene.sheet.n;
+    if let Some(r) = &opts.reference
+        && r.len() != n
+    {
+        bail!("the reference has {} vertices, the sheet {n} particles", r.len());
     }
-    let reference = match &opts.reference {
-        Some(p) => {
-            let r = read_obj_vertices(p)?;
-            let n = scene.sheet.n * scene.sheet.n;
-            if r.len() != n {
-                bail!("{}: the reference has {} vertices, the sheet {n} particles", p.display(), r.len());
-            }
-            Some(r)
-        }
-        None => None,
-    };
     let net = scene.sheet.build();
     let n_springs = net.springs().len();
-    let n = net.n_particles();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
     if let Some(solver) = opts.linear_solver {
         sim.stepper_mut().set_linear_solver(solver);
     }
-    if opts.warn_stability {
-        let pinned = sim.network.pinned().to_vec();
-        let v = vec![DVec3::ZERO; n];
-        let omega = anima_ode::stability::max_frequency(&mut sim.network, 0.0, &sim.state.x, &v, &pinned, 60);
-        if let Some(w) = anima_ode::stability::check_step(scene.integrator, scene.dt_s, omega) {
-            eprintln!("anima: warning: {w}");
-        }
+    let mut warnings = Vec::new();
+    let pinned = sim.network.pinned().to_vec();
+    let v = vec![DVec3::ZERO; n];
+    let omega = anima_ode::stability::max_frequency(&mut sim.network, 0.0, &sim.state.x, &v, &pinned, 60);
+    let damping =
+        (scene.sheet.damping > 0.0).then(|| format!("spring damping c = {} N·s/m", scene.sheet.damping));
+    if let Some(w) = stability_warning(scene.integrator, scene.dt_s, omega, damping.as_deref()) {
+        progress.warn(&w);
+        warnings.push(w);
     }
     let n_steps = (scene.duration_s / scene.dt_s).round() as usize;
     // At least one frame, and the last frame is always the end of the run.
     let n_frames = ((scene.duration_s * scene.frame_rate_hz).round() as usize).max(1);
-    let bar = opts.progress.then(|| indicatif::ProgressBar::new(n_steps as u64));
     let mut snapshots: Vec<(usize, f64, Vec<DVec3>)> = Vec::new();
-    let shown = crate::run::flex3d::sheet_frames(n_frames);
+    let shown = sheet_frames(n_frames);
+    progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
     let mut frames = 0;
@@ -147,58 +102,58 @@ pub fn run_sheet(scene: &SheetScene, label: &str, opts: &SheetRunOptions) -> Res
             } else {
                 ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
             };
-            if let Err(e) = sim.run(target - sim.steps_taken()) {
+            if let Err(e) = sim.run(target.saturating_sub(sim.steps_taken())) {
                 error = Some(e.to_string());
                 break;
             }
             frames = k;
-            if let Some(bar) = &bar {
-                bar.set_position(sim.steps_taken() as u64);
-            }
-            if let Some(dir) = opts.out_dir.as_ref().filter(|_| opts.write_frames) {
+            progress.advance(sim.steps_taken() as u64);
+            if let Some(dir) = opts.frame_dir() {
                 write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
                     Ok(write_obj(w, "sheet", &sim.state.x, &triangles)?)
                 })?;
             }
-            if opts.pictures && shown.contains(&k) {
+            if opts.picture_dir().is_some() && shown.contains(&k) {
                 snapshots.push((k, sim.time(), sim.state.x.clone()));
             }
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64();
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
-    }
+    progress.end();
     let x = &sim.state.x;
-    let com = sim.network.centre_of_mass(x);
-    let summary = SheetSummary {
+    let steps = sim.steps_taken();
+    let summary = Summary {
         scene: label.to_owned(),
-        integrator: scene.integrator.name().to_owned(),
-        dt: scene.dt_s,
-        particles: n,
-        springs: n_springs,
-        steps: sim.steps_taken(),
+        kind: "sheet",
+        steps: steps as u64,
         frames,
         simulated_seconds: sim.time(),
         wall_seconds,
-        ns_per_particle_step: wall_seconds * 1e9 / (sim.steps_taken().max(1) * n) as f64,
         all_finite: sim.state.first_non_finite().is_none(),
         error,
-        center_of_mass: com.to_array(),
-        rms_to_reference: reference
-            .as_ref()
-            .map(|r| (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()),
-        max_strain: sim.network.max_strain(x),
-        max_speed: sim.state.v.iter().map(|v| v.length()).fold(0.0, f64::max),
-        kinetic_energy: 0.5 * scene.sheet.total_mass / n as f64
-            * sim.state.v.iter().map(|v| v.length_squared()).sum::<f64>(),
-        solver_iterations: sim.stats.solver_iterations,
+        warnings,
+        detail: Detail::Sheet(SheetDetail {
+            integrator: scene.integrator.name().to_owned(),
+            dt: scene.dt_s,
+            particles: n,
+            springs: n_springs,
+            ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * n) as f64,
+            center_of_mass: sim.network.centre_of_mass(x).to_array(),
+            rms_to_reference: opts.reference.as_ref().map(|r| {
+                (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()
+            }),
+            max_strain: sim.network.max_strain(x),
+            max_speed: sim.state.v.iter().map(|v| v.length()).fold(0.0, f64::max),
+            kinetic_energy: 0.5 * scene.sheet.total_mass / n as f64
+                * sim.state.v.iter().map(|v| v.length_squared()).sum::<f64>(),
+            solver_iterations: sim.stats.solver_iterations,
+        }),
     };
     if let Some(dir) = &opts.out_dir {
         write_atomic(&dir.join("final.obj"), |w| Ok(write_obj(w, "sheet", x, &triangles)?))?;
-        if opts.pictures {
-            write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
-        }
+    }
+    if let Some(dir) = opts.picture_dir() {
+        write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
     }
     Ok(summary)
 }
@@ -221,15 +176,10 @@ fn write_pictures(
         img.label(10, 8, label, (h as f64 / 18.0).clamp(12.0, 24.0))?;
         Ok(img)
     };
-    let img = picture(last, 960, 720, &format!("t = {t:.2} s"))?;
-    write_atomic(&dir.join("final.png"), |w| Ok(img.write_png(w)?))?;
-    if !snapshots.is_empty() {
-        let tiles = snapshots
-            .iter()
-            .map(|(k, t, x)| picture(x, 400, 300, &format!("frame {k} (t = {t:.2} s)")))
-            .collect::<Result<Vec<_>>>()?;
-        let sheet = Image::grid(&tiles, 3, 4, [255, 255, 255])?;
-        write_atomic(&dir.join("frames.png"), |w| Ok(sheet.write_png(w)?))?;
-    }
-    Ok(())
+    let last = picture(last, 960, 720, &format!("t = {t:.2} s"))?;
+    let tiles = snapshots
+        .iter()
+        .map(|(k, t, x)| picture(x, 400, 300, &format!("frame {k} (t = {t:.2} s)")))
+        .collect::<Result<Vec<_>>>()?;
+    crate::picture::write_final_and_sheet(dir, &last, &tiles, 3)
 }

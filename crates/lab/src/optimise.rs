@@ -1,0 +1,193 @@
+//! Controller optimisation from a spec file (`anima optimise SPEC`, and the thesis's runs of
+//! `cargo xtask reproduce nunes`): the spec's objective over its free parameters, with its optimiser
+//! and seed, one generation at a time, logging every evaluation after each generation and resuming from
+//! that log when it is there. The optimisers are seeded, so a resumed run equals an uninterrupted one.
+
+use std::path::{Path, PathBuf};
+
+use anima_control::optimise::{
+    Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Objective, Optimiser, RandomSearch, RunLog,
+    resume, run,
+};
+use anima_control::{Controller, ParamId};
+use anima_scene::optimisation::{LoadedOptimisation, ObjectiveSpec, OptimiserSpec};
+use anyhow::{Context, Result, bail};
+
+use crate::nunes;
+use crate::output::write_atomic;
+use crate::run::Progress;
+
+/// The fitness of the spec's objective for `controller` with its parameters `ids` set to `x`.
+pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamId], x: &[f64]) -> f64 {
+    let mut c = controller.clone();
+    c.apply(ids, x);
+    match *objective {
+        ObjectiveSpec::Walk { iterations } => {
+            nunes::walk(c, iterations, &nunes::WalkRules::default(), &[], |_| ()).map_or(0.0, |o| o.fitness())
+        }
+        ObjectiveSpec::Throw { iterations, height_cap } => {
+            let cap = height_cap.then(|| nunes::throw_height_cap(&nunes::BASKET));
+            nunes::throw(c, &nunes::BASKET, iterations, |_| ()).map_or(0.0, |o| o.fitness_capped(cap))
+        }
+    }
+}
+
+/// The spec's optimiser over the selected parameters, started from the controller's values.
+pub fn optimiser(loaded: &LoadedOptimisation, ids: &[ParamId]) -> Result<Box<dyn Optimiser>> {
+    let c = &loaded.controller;
+    let (space, x0, seed) = (c.space(ids), c.values_of(ids), loaded.spec.seed);
+    for stage in match &loaded.spec.optimiser {
+        OptimiserSpec::Greedy { stages } => stages.as_slice(),
+        _ => &[],
+    } {
+        if let Some(d) = stage.dims.iter().find(|&&d| d >= ids.len()) {
+            bail!(
+                "stage `{}` names parameter {d}, but the selection has {} free parameters",
+                stage.name,
+                ids.len()
+            );
+        }
+    }
+    Ok(match &loaded.spec.optimiser {
+        OptimiserSpec::Greedy { stages } => Box::new(GreedySearch::new(space, stages.clone(), x0, seed)?),
+        OptimiserSpec::Cmaes { sigma0, lambda, restarts } => {
+            let cfg = CmaesConfig { lambda: *lambda, restarts: *restarts, ..CmaesConfig::new(x0, *sigma0) };
+            Box::new(Cmaes::new(space, cfg, seed)?)
+        }
+        OptimiserSpec::RandomSearch { batch } => Box::new(RandomSearch::new(space, *batch, seed)?),
+        OptimiserSpec::Annealing(cfg) => {
+            let cfg =
+                AnnealingConfig { x0: if cfg.x0.is_empty() { x0 } else { cfg.x0.clone() }, ..cfg.clone() };
+            Box::new(Annealing::new(space, cfg, seed)?)
+        }
+    })
+}
+
+/// Runs `opt` to `budget` evaluations, one generation at a time, the log written (whole) to `log_path`
+/// after each; an earlier log of the same run there is replayed first and the run goes on from it.
+/// `report` sees the log after every generation.
+pub fn optimise_logged<O: Optimiser + ?Sized>(
+    opt: &mut O,
+    objective: &(impl Objective + ?Sized),
+    budget: usize,
+    log_path: &Path,
+    mut report: impl FnMut(&RunLog, Resumed),
+) -> Result<RunLog> {
+    let mut log = RunLog::default();
+    if let Ok(text) = std::fs::read_to_string(log_path) {
+        let old: RunLog = ron::from_str(&text).with_context(|| format!("reading {}", log_path.display()))?;
+        match resume(opt, &old) {
+            Ok(()) => {
+                report(&old, Resumed::From(old.len()));
+                log = old;
+            }
+            Err(e) => report(&log, Resumed::Refused(e.to_string())),
+        }
+    }
+    while log.len() < budget {
+        let before = log.len();
+        run(opt, objective, before + 1, &mut log);
+        if log.len() == before {
+            break;
+        }
+        let text = ron::ser::to_string_pretty(&log, ron::ser::PrettyConfig::default())?;
+        write_atomic(log_path, |w| Ok(w.write_all(text.as_bytes())?))?;
+        report(&log, Resumed::No);
+    }
+    Ok(log)
+}
+
+/// What [`optimise_logged`] did with an earlier log.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Resumed {
+    /// Nothing to say: a generation was evaluated.
+    No,
+    /// It replayed that many logged evaluations.
+    From(usize),
+    /// The log did not replay (another seed or configuration); the run started over.
+    Refused(String),
+}
+
+/// Where `anima optimise` writes, and how much it runs.
+#[derive(Debug, Clone)]
+pub struct OptimiseOptions {
+    pub out_dir: PathBuf,
+    /// Overrides the spec's evaluation budget.
+    pub evaluations: Option<usize>,
+    /// Ignore an earlier log and start over.
+    pub fresh: bool,
+}
+
+/// What a spec's run found.
+#[derive(Debug, Clone)]
+pub struct OptimiseOutcome {
+    pub log: RunLog,
+    /// Evaluations replayed from an earlier log.
+    pub resumed: usize,
+    pub best_x: Vec<f64>,
+    pub best_fitness: f64,
+    /// The controller's own fitness (the first evaluation of the run).
+    pub start_fitness: f64,
+    pub controller: Controller,
+    pub log_path: PathBuf,
+    pub controller_path: PathBuf,
+}
+
+/// Runs a spec: `<out>/<name>.log.ron` after every generation, `<out>/<name>.ron` (the best controller)
+/// at the end. `progress` counts evaluations.
+pub fn optimise(
+    loaded: &LoadedOptimisation,
+    opts: &OptimiseOptions,
+    progress: &mut dyn Progress,
+) -> Result<OptimiseOutcome> {
+    let spec = &loaded.spec;
+    let ids = loaded.controller.free_params(&spec.parameters);
+    if ids.is_empty() {
+        bail!(
+            "the selection names no free parameter of the controller (a free parameter is written with an interval)"
+        );
+    }
+    let mut opt = optimiser(loaded, &ids)?;
+    let budget = opts.evaluations.unwrap_or(spec.evaluations);
+    let log_path = opts.out_dir.join(format!("{}.log.ron", spec.name));
+    if opts.fresh && log_path.exists() {
+        std::fs::remove_file(&log_path).with_context(|| format!("removing {}", log_path.display()))?;
+    }
+    let objective = |x: &[f64]| fitness(&spec.objective, &loaded.controller, &ids, x);
+    let mut resumed = 0;
+    progress.begin(budget as u64);
+    let log = optimise_logged(opt.as_mut(), &objective, budget, &log_path, |log, r| {
+        match r {
+            Resumed::From(n) => resumed = n,
+            Resumed::Refused(why) => {
+                progress.warn(&format!("not resuming from {} ({why}); starting over", log_path.display()))
+            }
+            Resumed::No => {}
+        }
+        progress.advance(log.len() as u64);
+    })?;
+    progress.end();
+    let best = log.best().context("the optimiser evaluated nothing")?;
+    let mut controller = loaded.controller.clone();
+    controller.apply(&ids, &best.x);
+    let controller_path = opts.out_dir.join(format!("{}.ron", spec.name));
+    let text = format!(
+        "// Written by `anima optimise` from the spec `{}`: {} evaluations, seed {}, best fitness {}.\n{}",
+        spec.name,
+        log.len(),
+        spec.seed,
+        best.fitness,
+        controller.to_ron()
+    );
+    write_atomic(&controller_path, |w| Ok(w.write_all(text.as_bytes())?))?;
+    Ok(OptimiseOutcome {
+        resumed,
+        best_x: best.x.clone(),
+        best_fitness: best.fitness,
+        start_fitness: log.evaluations[0].fitness,
+        controller,
+        log: log.clone(),
+        log_path,
+        controller_path,
+    })
+}
