@@ -3,4 +3,5 @@
 mod flex3d_experiments;
 mod flex3d_scenes;
 mod oliveira;
+mod reports;
 mod standard_sheet;

@@ -154,3 +154,111 @@ fn standard_sheet_runs_and_compares_with_a_reference() {
     assert!(d > 1e-7 && d < 1e-2, "RK4 differs from symplectic Euler by a little: {d}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Every `.par` and `.ron` file under `assets/`, relative to the repository.
+fn asset_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    entries.sort();
+    for p in entries {
+        if p.is_dir() {
+            asset_files(&p, out);
+        } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron") || e.eq_ignore_ascii_case("par")) {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+fn every_scene_file_under_assets_runs_and_every_part_is_refused_as_a_scene() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    let mut files = Vec::new();
+    asset_files(&root, &mut files);
+    let (mut scenes, mut parts) = (0, 0);
+    for file in &files {
+        let rel = file.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/");
+        let out = temp_dir("every-asset");
+        let o = anima()
+            .args(["run", "--quiet", "--no-pictures", "--no-frames", "--duration", "0.2", "--out"])
+            .arg(&out)
+            .arg(file)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let folder = rel.split('/').next().unwrap();
+        if rel == "flex3d/fig6-4-papel-ocr.par" {
+            // The thesis's figure as OCR gave it: refused where the listing is broken.
+            assert_eq!(o.status.code(), Some(1), "{rel}: {err}");
+            assert!(err.contains("fig6-4-papel-ocr.par:18:5:"), "{rel}: {err}");
+        } else if matches!(folder, "skeletons" | "controllers" | "optimisations") {
+            parts += 1;
+            assert_eq!(o.status.code(), Some(1), "{rel} is a part, not a scene: {err}");
+            assert!(
+                err.contains("part of a scene") || err.contains("anima optimise"),
+                "{rel}: the error says what the file is: {err}"
+            );
+        } else {
+            scenes += 1;
+            assert!(o.status.success(), "{rel}: {err}");
+            let summary: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+            assert_eq!(summary["all_finite"], true, "{rel}");
+            let t = summary["simulated_seconds"].as_f64().unwrap();
+            assert!((0.19..=0.25).contains(&t), "{rel}: ran {t} s, not 0.2 s");
+        }
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+    assert!(scenes >= 25 && parts >= 15, "{scenes} scenes and {parts} parts found: is the folder walked?");
+}
+
+#[test]
+fn closed_choices_list_their_values() {
+    let o = anima().args(["run", "--friction", "sticky"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("literal") && err.contains("viscous"), "{err}");
+    let o = anima().args(["run", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&o.stdout);
+    for value in ["forward-euler:", "bdf2:", "cholesky:", "nearest:", "reflect:"] {
+        assert!(help.contains(value), "`--help` lists {value} with its meaning:\n{help}");
+    }
+}
+
+#[test]
+fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
+    let sheet = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/standard-sheet-32.ron");
+    let out = temp_dir("switch");
+    let o = anima().args(["run", "--quiet", "--friction", "viscous", "--out"]).arg(&out).arg(&sheet).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("does not apply to a sheet scene"), "{err}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/optimisations/walk.ron");
+    let (whole, resumed) = (temp_dir("optimise-whole"), temp_dir("optimise-resumed"));
+    let optimise = |out: &Path, extra: &[&str]| {
+        let o = anima().args(["optimise", "--quiet", "--out"]).arg(out).args(extra).arg(&spec).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    optimise(&whole, &[]);
+    // Interrupted after 16 evaluations (the start and the 15 global draws), then run again.
+    optimise(&resumed, &["--evaluations", "16"]);
+    let partial = std::fs::read_to_string(resumed.join("walk-greedy.log.ron")).unwrap();
+    optimise(&resumed, &[]);
+    for file in ["walk-greedy.log.ron", "walk-greedy.ron"] {
+        let (a, b) = (std::fs::read(whole.join(file)).unwrap(), std::fs::read(resumed.join(file)).unwrap());
+        assert!(a == b, "{file}: the resumed run differs from the uninterrupted one");
+    }
+    let log = std::fs::read_to_string(whole.join("walk-greedy.log.ron")).unwrap();
+    assert_eq!(partial.matches("accepted:").count(), 16, "the interrupted run stopped after 16 evaluations");
+    assert_eq!(log.matches("accepted:").count(), 46, "46 evaluations");
+    // `cargo xtask reproduce nunes-walk` runs the same spec: its winner is the committed walker.
+    let body = |text: &str| text.lines().filter(|l| !l.starts_with("//")).collect::<Vec<_>>().join("\n");
+    let committed = std::fs::read_to_string(spec.with_file_name("../controllers/walk-optimised.ron")).unwrap();
+    let found = std::fs::read_to_string(whole.join("walk-greedy.ron")).unwrap();
+    assert_eq!(body(&found), body(&committed), "anima optimise finds the committed optimised walker");
+    std::fs::remove_dir_all(&whole).unwrap();
+    std::fs::remove_dir_all(&resumed).unwrap();
+}

@@ -325,3 +325,33 @@ fn feedback_targets_read_the_centre_of_mass_sensors() {
     }
     assert!(moved, "the sensors never moved the target");
 }
+
+/// A character scene of `assets/scenes/`, run through `anima run`'s code, with its evaluation.
+fn run_scene(name: &str) -> anima_lab::run::body::EvaluationOutcome {
+    use anima_lab::run::{Detail, RunOptions, Silent};
+    let path = anima_lab::repo::Repo::here().assets(format!("scenes/{name}.ron"));
+    let scene = anima_scene::load(&path, &anima_scene::LoadOptions::default()).unwrap();
+    assert_eq!(scene.kind(), anima_scene::SceneKind::Character, "{name}");
+    let s = anima_lab::run::run(&scene, name, &RunOptions::quiet(), &mut Silent).unwrap();
+    let Detail::Body(d) = s.detail else { panic!("{name}: a figures summary") };
+    d.evaluation.unwrap_or_else(|| panic!("{name}: the scene asks for an evaluation"))
+}
+
+#[test]
+fn the_shipped_character_scenes_are_the_thesis_experiments() {
+    use anima_lab::run::body::EvaluationOutcome;
+    // The walk scene's evaluation is the walking evaluation of the optimised walker, to the bit.
+    let EvaluationOutcome::Walk(w) = run_scene("walk") else { panic!("a walk evaluation") };
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    let thesis = nunes::walk(nunes::controller("walk-optimised").unwrap(), 1000, &rules, &[], |_| ()).unwrap();
+    assert_eq!(w, thesis);
+    assert!(w.distance > 10.0 && !w.fell, "{w:?}");
+    let EvaluationOutcome::Throw(t) = run_scene("throw") else { panic!("a throw evaluation") };
+    let thesis = nunes::throw(nunes::controller("throw-optimised").unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
+    assert_eq!(t, thesis);
+    assert!(t.scored, "{t:?}");
+    let EvaluationOutcome::Backflip { outcome, flipped } = run_scene("backflip") else { panic!("a backflip") };
+    let thesis = nunes::backflip(nunes::controller("backflip").unwrap(), nunes::FLIP_SPACING, 600, |_| ()).unwrap();
+    assert_eq!(outcome, thesis);
+    assert!(flipped, "{outcome:?}");
+}

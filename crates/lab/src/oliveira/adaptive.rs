@@ -12,11 +12,11 @@ use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, ContactVelocity, OliveiraRemeshing, RemeshStats, ShortEdgeRule,
-    SizingRemeshing, StepRule, SubdivisionRemeshing,
+    AdaptiveCloth, AdaptiveMethod, ContactVelocity, RemeshStats, ShortEdgeRule, StepRule,
 };
 use anima_geom::{Aabb, DVec3, TriangleMesh};
 use anima_ode::Integrator;
+use anima_scene::oliveira::Remesher;
 use anima_viz::{Camera, Image, LinePlot, RenderMesh, RenderSettings, Series, render};
 use anyhow::{Context, Result, bail};
 
@@ -75,12 +75,6 @@ const IMPLICIT_KINDS: [(Kind, &str); 7] = [
     (Kind::OneToFour, "adaptive: 1-to-4 subdivision"),
     (Kind::Sizing, "adaptive: sizing field"),
 ];
-
-/// The sizing field of the backward-Euler runs: `for_cloth`'s terms with edges no shorter than the
-/// reference's 6.25 cm and a pass every 1/240 s (see the report's notes).
-fn implicit_sizing() -> SizingRemeshing {
-    SizingRemeshing { interval_s: 1.0 / 240.0, ..SizingRemeshing::for_cloth(0.0625) }
-}
 
 #[derive(Debug, Clone, Copy)]
 struct Sample {
@@ -151,24 +145,29 @@ fn build(repo: &Repo, test: &Test, kind: Kind, implicit: Option<f64>) -> Result<
         loaded.scene.options.contact_velocity = ContactVelocity::EndOfStep;
     }
     let cloth = loaded.build().context("building the scene")?;
-    let method = match kind {
-        Kind::Uniform(..) => AdaptiveMethod::Static,
-        Kind::Oliveira => AdaptiveMethod::Oliveira(OliveiraRemeshing {
-            interval_s: REMESH_INTERVAL_S,
+    let test_number = test.number as u8;
+    let remesher = match kind {
+        Kind::Uniform(..) => None,
+        Kind::Oliveira => Some(Remesher::Oliveira {
+            test: test_number,
             short_edge: ShortEdgeRule::MinLength,
-            ..(test.remeshing)()
-        }),
-        Kind::OliveiraLiteral => AdaptiveMethod::Oliveira(OliveiraRemeshing {
             interval_s: REMESH_INTERVAL_S,
+        }),
+        Kind::OliveiraLiteral => Some(Remesher::Oliveira {
+            test: test_number,
             short_edge: ShortEdgeRule::LiteralSquare,
-            ..(test.remeshing)()
-        }),
-        Kind::OneToFour => AdaptiveMethod::Subdivision(SubdivisionRemeshing {
             interval_s: REMESH_INTERVAL_S,
-            ..SubdivisionRemeshing::test_3()
         }),
-        Kind::Sizing if implicit.is_some() => AdaptiveMethod::SizingField(implicit_sizing()),
-        Kind::Sizing => AdaptiveMethod::SizingField(SizingRemeshing::for_cloth(0.03)),
+        Kind::OneToFour => Some(Remesher::Subdivision { interval_s: REMESH_INTERVAL_S }),
+        // With backward Euler: edges no shorter than the reference's 6.25 cm, a pass every 1/240 s.
+        Kind::Sizing if implicit.is_some() => {
+            Some(Remesher::SizingField { min_edge_m: 0.0625, interval_s: 1.0 / 240.0 })
+        }
+        Kind::Sizing => Some(Remesher::SizingField { min_edge_m: 0.03, interval_s: 1.0 / 60.0 }),
+    };
+    let method = match remesher {
+        Some(r) => r.method().map_err(anyhow::Error::msg)?,
+        None => AdaptiveMethod::Static,
     };
     Ok(AdaptiveCloth::new(cloth, loaded.scene.gravity_m_s2, method))
 }

@@ -11,8 +11,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, OliveiraRemeshing, StepError, StepReport,
-    criteria::interpolate_at,
+    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, StepError, StepReport, criteria::interpolate_at,
 };
 use anima_geom::query::tessellate;
 use anima_geom::{DVec2, DVec3, Solid, TriangleMesh};
@@ -35,8 +34,6 @@ pub struct DrapeTest {
     pub thesis: &'static [(&'static str, f64, u64, f64)],
     /// Simulated time of the shortened adaptive runs (`ANIMA_ADAPTIVE_SHORT=1`), s.
     pub short: f64,
-    /// The thesis's remesher parameters for this test (Tables 5.1, 5.3, 5.5).
-    pub remeshing: fn() -> OliveiraRemeshing,
 }
 
 /// Tests I, II and III.
@@ -55,7 +52,6 @@ pub const TESTS: [DrapeTest; 3] = [
             ("fine 17 × 17", 19237.7, 174312, 0.11036),
         ],
         short: 0.2,
-        remeshing: OliveiraRemeshing::test_1,
     },
     DrapeTest {
         number: 2,
@@ -71,7 +67,6 @@ pub const TESTS: [DrapeTest; 3] = [
             ("fine 17 × 17", 13870.7, 346795, 0.03999),
         ],
         short: 0.2,
-        remeshing: OliveiraRemeshing::test_2,
     },
     DrapeTest {
         number: 3,
@@ -83,7 +78,6 @@ pub const TESTS: [DrapeTest; 3] = [
         table: "Table 5.6",
         thesis: &[("1-to-4 subdivision", 20086.4, 122509, 0.16395), ("remeshing", 21204.5, 269071, 0.07880)],
         short: 0.3,
-        remeshing: OliveiraRemeshing::test_3,
     },
 ];
 

@@ -90,7 +90,11 @@ pub fn run(
     let n_frames = scene.n_frames();
     let n_steps = scene.n_steps();
     let particles = world.positions().len();
-    let shown = if opts.picture_dir().is_some() { sheet_frames(n_frames) } else { Vec::new() };
+    // Frames 1..=n_frames at the scene's frame rate (spec S4.5); when the duration is not a whole number
+    // of frame intervals (a shortened run, say), one more frame at the end, so the run always reaches
+    // its duration.
+    let extra = usize::from(n_frames == 0 || scene.frame_step(n_frames) < n_steps);
+    let shown = if opts.picture_dir().is_some() { sheet_frames(n_frames + extra) } else { Vec::new() };
     let mut snapshots = Vec::new();
     let mut frame_stats = Vec::with_capacity(n_frames.min(100_000));
     if opts.frame0 {
@@ -100,8 +104,8 @@ pub fn run(
     let start = Instant::now();
     let mut failure = None;
     let mut frames_done = 0;
-    for k in 1..=n_frames {
-        let target = scene.frame_step(k).min(n_steps);
+    for k in 1..=n_frames + extra {
+        let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target, progress) {
             failure = Some(e);
             break;
