@@ -31,7 +31,7 @@ fn run_checking(cloth: &mut OliveiraCloth, t_end: f64, check_every: u64, what: &
     while cloth.time() < t_end {
         let step = cloth.steps() + 1;
         cloth.step().unwrap_or_else(|e| panic!("{what}: {e}"));
-        if step % check_every == 0 || cloth.time() >= t_end {
+        if step.is_multiple_of(check_every) || cloth.time() >= t_end {
             let inside = cloth.penetrations();
             assert!(
                 inside.is_empty(),

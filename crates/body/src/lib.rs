@@ -18,6 +18,30 @@
 //!
 //! Units are SI: the thesis's tables are read as kg, N·m/rad and N·m·s/rad (see `docs/body.md` for
 //! that decision and for the PD stability report).
+//!
+//! ```
+//! use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, Sensors, Signal, World, WorldSettings};
+//!
+//! // The thesis's humanoid, its gains × 100 as implicit springs, standing on the ground at Δt = 0.05 s.
+//! let actuation = Actuation { mode: PdMode::ImplicitSpring, gain_scale: 100.0, torque_limit_rad: 1.0, brake_rad_s: 4.0 };
+//! let humanoid = BuiltinSkeleton::Humanoid.load().with_actuation(actuation).unwrap();
+//! let mut world = World::new(WorldSettings::thesis()).unwrap();
+//! let m = world.add_model(&humanoid, Placement::OnGround { dx: 0.0 }).unwrap();
+//! let knee = humanoid.actuator_index("knee_l").unwrap();
+//! let mut sensors = Sensors::new(&world, m).unwrap();
+//! for _ in 0..20 {
+//!     // Every actuator holds its initial angle but the left knee, which bends.
+//!     let commands = world.commands_mut(m).unwrap();
+//!     commands.clear();
+//!     for a in 0..humanoid.n_actuators() {
+//!         commands.push(Signal::angle(a, if a == knee { -0.5 } else { 0.0 })).unwrap();
+//!     }
+//!     world.step().unwrap();
+//! }
+//! world.sense(&mut sensors).unwrap();
+//! assert!(sensors.actuator_angle[knee] < -0.2, "the knee follows its target");
+//! assert!(sensors.all_finite());
+//! ```
 
 mod actuator;
 mod dense;

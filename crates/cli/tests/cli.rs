@@ -162,7 +162,10 @@ fn asset_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for p in entries {
         if p.is_dir() {
             asset_files(&p, out);
-        } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron") || e.eq_ignore_ascii_case("par")) {
+        } else if p
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ron") || e.eq_ignore_ascii_case("par"))
+        {
             out.push(p);
         }
     }
@@ -227,7 +230,12 @@ fn closed_choices_list_their_values() {
 fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
     let sheet = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/standard-sheet-32.ron");
     let out = temp_dir("switch");
-    let o = anima().args(["run", "--quiet", "--friction", "viscous", "--out"]).arg(&out).arg(&sheet).output().unwrap();
+    let o = anima()
+        .args(["run", "--quiet", "--friction", "viscous", "--out"])
+        .arg(&out)
+        .arg(&sheet)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("does not apply to a sheet scene"), "{err}");
@@ -239,7 +247,8 @@ fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/optimisations/walk.ron");
     let (whole, resumed) = (temp_dir("optimise-whole"), temp_dir("optimise-resumed"));
     let optimise = |out: &Path, extra: &[&str]| {
-        let o = anima().args(["optimise", "--quiet", "--out"]).arg(out).args(extra).arg(&spec).output().unwrap();
+        let o =
+            anima().args(["optimise", "--quiet", "--out"]).arg(out).args(extra).arg(&spec).output().unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     };
     optimise(&whole, &[]);
@@ -256,7 +265,8 @@ fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
     assert_eq!(log.matches("accepted:").count(), 46, "46 evaluations");
     // `cargo xtask reproduce nunes-walk` runs the same spec: its winner is the committed walker.
     let body = |text: &str| text.lines().filter(|l| !l.starts_with("//")).collect::<Vec<_>>().join("\n");
-    let committed = std::fs::read_to_string(spec.with_file_name("../controllers/walk-optimised.ron")).unwrap();
+    let committed =
+        std::fs::read_to_string(spec.with_file_name("../controllers/walk-optimised.ron")).unwrap();
     let found = std::fs::read_to_string(whole.join("walk-greedy.ron")).unwrap();
     assert_eq!(body(&found), body(&committed), "anima optimise finds the committed optimised walker");
     std::fs::remove_dir_all(&whole).unwrap();

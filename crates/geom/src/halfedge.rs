@@ -177,7 +177,7 @@ impl HalfEdges {
     /// The previous half-edge around the same face.
     #[inline]
     pub fn prev(&self, h: u32) -> u32 {
-        if h % 3 == 0 { h + 2 } else { h - 1 }
+        if h.is_multiple_of(3) { h + 2 } else { h - 1 }
     }
 
     #[inline]

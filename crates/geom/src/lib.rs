@@ -7,6 +7,22 @@
 //!
 //! This crate knows no physics and does no file I/O of its own: readers take `impl Read`, writers
 //! `impl Write`.
+//!
+//! ```
+//! use anima_geom::{DVec3, PreparedTriangle, TriangleMesh, box_mesh, obj, read_obj, segment_triangle};
+//!
+//! // A particle moving from above through a triangle: FLEX3D's swept test finds where it crossed.
+//! let tri = PreparedTriangle::new([DVec3::ZERO, DVec3::X, DVec3::Y]);
+//! let hit = segment_triangle(DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.0, 0.0, -2.0), &tri).unwrap();
+//! assert!((hit.s - 0.5).abs() < 1e-12);
+//!
+//! // A closed mesh knows its inside, and OBJ frames read back exactly.
+//! let cube: TriangleMesh = box_mesh(DVec3::ZERO, DVec3::ONE);
+//! assert!(cube.contains_point(DVec3::splat(0.5)) && !cube.contains_point(DVec3::splat(1.5)));
+//! let mut text = Vec::new();
+//! obj::write_obj(&mut text, "cube", cube.vertices(), cube.triangles()).unwrap();
+//! assert_eq!(read_obj(&text[..]).unwrap().vertices(), cube.vertices());
+//! ```
 
 mod grid;
 mod grid_mesh;

@@ -1,4 +1,4 @@
-//! The aid used to re-author the backflip poses the thesis only draws (spec §8.4.4 [RECON]): CMA-ES
+//! The aid used to re-author the backflip poses the thesis only draws (spec §8.4.4 \[RECON\]): CMA-ES
 //! over the poses of `assets/controllers/backflip.ron` that decide the flip, rewarding, in stages,
 //! the foot reaching the pusher's hands, the backward rotation, the landing on both feet and standing
 //! at the end. Prints the best vector as `label=value` pairs (the overrides `flip_probe` takes); the

@@ -1,4 +1,4 @@
-//! The aid used to re-author the walking poses the thesis only draws (spec §8.1.2 [RECON]): CMA-ES
+//! The aid used to re-author the walking poses the thesis only draws (spec §8.1.2 \[RECON\]): CMA-ES
 //! over a symmetric description of W-LEGS's E1 and E3 (E4, E6 are their mirrors), rewarding the
 //! distance walked before a fall over several sensor thresholds. Prints the best pose vector; the
 //! numbers were then written into `assets/controllers/walk.ron` by hand.

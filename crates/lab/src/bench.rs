@@ -519,10 +519,10 @@ fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
                 rows.push(("large", *p));
             }
         }
-        if c.integrator.is_adaptive() {
-            if let Some(p) = c.points.iter().min_by(|a, b| a.seconds.total_cmp(&b.seconds)) {
-                rows.push(("tolerance", *p));
-            }
+        if c.integrator.is_adaptive()
+            && let Some(p) = c.points.iter().min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+        {
+            rows.push(("tolerance", *p));
         }
         for (what, p) in rows {
             let _ = writeln!(

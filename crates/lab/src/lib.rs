@@ -1,4 +1,45 @@
-//! anima's experiments and runs.
+//! anima's experiments and runs: every thesis experiment and objective as a function, and the run loop
+//! of every kind of scene.
+//!
+//! # What this crate is
+//!
+//! - [`run`]: a loaded scene of any kind ([`anima_scene::Scene`]) run to its end, with frames, pictures
+//!   and one JSON [`run::Summary`] — what `anima run` does.
+//! - [`optimise`]: a controller optimisation from a spec file, logged and resumable — what
+//!   `anima optimise` does.
+//! - [`flex3d`], [`oliveira`], [`nunes`]: the experiments of the three theses (Nedel 1993's E-1…E-8,
+//!   Oliveira 2013's Tests I–III on static, implicit and adaptive meshes, Nunes 2006's walker, thrower
+//!   and backflip), their evaluators and objectives, the reports that set our numbers beside the
+//!   theses', and the figures; [`bench`]: speed against error for every integrator.
+//! - [`report`]: reports as documents of named sections, so a partial run updates its own sections;
+//!   [`repo`]: where assets are read and reports, figures and caches are written.
+//!
+//! # What it is not
+//!
+//! No physics of its own (the models are `anima-cloth`'s and `anima-body`'s), no file formats (scene
+//! files are `anima-scene`'s), no command line: `anima` and `cargo xtask` are thin callers of this
+//! crate, and the integration tests check the numbers the reports print through the same functions.
+//! It writes files only where its caller says: a run's output folder, or the repository a [`repo::Repo`]
+//! names.
+//!
+//! # Use
+//!
+//! ```
+//! use anima_lab::flex3d::e1_table_4_1;
+//! use anima_lab::repo::Repo;
+//! use anima_lab::run::{Detail, RunOptions, Silent, run};
+//! use anima_ode::Integrator;
+//! use anima_scene::{LoadOptions, load};
+//!
+//! // Nedel 1993's Table 4.1, to the last printed digit.
+//! assert_eq!(e1_table_4_1(Integrator::ForwardEuler).matches, 66);
+//!
+//! // Any scene file, run as `anima run` runs it (here without writing anything).
+//! let scene = load(&Repo::here().assets("scenes/standard-sheet-32.ron"), &LoadOptions::default()).unwrap();
+//! let summary = run(&scene, "standard sheet", &RunOptions::quiet(), &mut Silent).unwrap();
+//! let Detail::Sheet(sheet) = &summary.detail else { unreachable!() };
+//! assert!(summary.all_finite && (sheet.center_of_mass[2] - 1.4655).abs() < 2e-3);
+//! ```
 
 pub mod bench;
 pub mod figures;

@@ -343,15 +343,20 @@ fn the_shipped_character_scenes_are_the_thesis_experiments() {
     // The walk scene's evaluation is the walking evaluation of the optimised walker, to the bit.
     let EvaluationOutcome::Walk(w) = run_scene("walk") else { panic!("a walk evaluation") };
     let rules = WalkRules { window: 0, ..WalkRules::default() };
-    let thesis = nunes::walk(nunes::controller("walk-optimised").unwrap(), 1000, &rules, &[], |_| ()).unwrap();
+    let thesis =
+        nunes::walk(nunes::controller("walk-optimised").unwrap(), 1000, &rules, &[], |_| ()).unwrap();
     assert_eq!(w, thesis);
     assert!(w.distance > 10.0 && !w.fell, "{w:?}");
     let EvaluationOutcome::Throw(t) = run_scene("throw") else { panic!("a throw evaluation") };
-    let thesis = nunes::throw(nunes::controller("throw-optimised").unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
+    let thesis =
+        nunes::throw(nunes::controller("throw-optimised").unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
     assert_eq!(t, thesis);
     assert!(t.scored, "{t:?}");
-    let EvaluationOutcome::Backflip { outcome, flipped } = run_scene("backflip") else { panic!("a backflip") };
-    let thesis = nunes::backflip(nunes::controller("backflip").unwrap(), nunes::FLIP_SPACING, 600, |_| ()).unwrap();
+    let EvaluationOutcome::Backflip { outcome, flipped } = run_scene("backflip") else {
+        panic!("a backflip")
+    };
+    let thesis =
+        nunes::backflip(nunes::controller("backflip").unwrap(), nunes::FLIP_SPACING, 600, |_| ()).unwrap();
     assert_eq!(outcome, thesis);
     assert!(flipped, "{outcome:?}");
 }

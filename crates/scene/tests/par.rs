@@ -508,3 +508,88 @@ fn ron_enum_variant_in_the_wrong_case_is_refused() {
     assert!(e.expected.contains("`Literal`") && e.expected.contains("`Viscous`"), "{e}");
     assert_eq!(e.found, "literal");
 }
+
+mod kinds {
+    use std::path::{Path, PathBuf};
+
+    use anima_scene::{LoadOptions, SceneError, SceneKind, load};
+
+    fn write(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("anima-scene-kinds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    fn assets(rel: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets").join(rel)
+    }
+
+    fn kind_error(path: &Path) -> String {
+        match load(path, &LoadOptions::default()) {
+            Err(e @ SceneError::Kind { .. }) => e.to_string(),
+            other => panic!("{}: expected a kind error, found {other:?}", path.display()),
+        }
+    }
+
+    #[test]
+    fn the_kind_is_told_by_the_struct_name_or_by_a_field_only_that_kind_has() {
+        let kind = |rel: &str| load(&assets(rel), &LoadOptions::default()).unwrap().kind();
+        assert_eq!(kind("flex3d/a2-8-toalha.par"), SceneKind::Flex3d);
+        assert_eq!(kind("flex3d/tablecloth.ron"), SceneKind::Flex3d);
+        assert_eq!(kind("scenes/standard-sheet-32.ron"), SceneKind::Sheet);
+        assert_eq!(kind("oliveira/test-3-sphere-5x5.ron"), SceneKind::Oliveira);
+        assert_eq!(kind("oliveira/test-3-sphere-adaptive.ron"), SceneKind::Oliveira);
+        assert_eq!(kind("scenes/stand.ron"), SceneKind::Body);
+        assert_eq!(kind("scenes/walk.ron"), SceneKind::Character);
+        // Files written before scenes were named: told by their fields.
+        let flex3d =
+            std::fs::read_to_string(assets("flex3d/curtain.ron")).unwrap().replacen("Flex3dScene(", "(", 1);
+        let k = load(&write("unnamed-flex3d.ron", &flex3d), &LoadOptions::default()).map(|s| s.kind());
+        assert_eq!(k.unwrap(), SceneKind::Flex3d);
+        let oliveira = std::fs::read_to_string(assets("oliveira/test-3-sphere-5x5.ron")).unwrap().replacen(
+            "OliveiraScene(",
+            "(",
+            1,
+        );
+        let k = load(&write("unnamed-oliveira.ron", &oliveira), &LoadOptions::default()).map(|s| s.kind());
+        assert_eq!(k.unwrap(), SceneKind::Oliveira);
+    }
+
+    #[test]
+    fn parts_and_specs_are_not_scenes_and_unknown_kinds_are_named() {
+        let e = kind_error(&assets("skeletons/humanoid.ron"));
+        assert!(e.contains("skeleton") && e.contains("part of a scene"), "{e}");
+        let e = kind_error(&assets("controllers/walk.ron"));
+        assert!(e.contains("controller") && e.contains("part of a scene"), "{e}");
+        let e = kind_error(&assets("optimisations/walk.ron"));
+        assert!(e.contains("anima optimise"), "{e}");
+        let e = kind_error(&write("other.ron", "Wardrobe(\n    doors: 2,\n)"));
+        assert!(e.contains("`Wardrobe`") && e.contains("`CharacterScene`"), "{e}");
+        let e = kind_error(&write("fieldless.ron", "(\n    doors: 2,\n)"));
+        assert!(e.contains("cannot tell which kind"), "{e}");
+        let e = kind_error(&write("scene.txt", "anything"));
+        assert!(e.contains(".par or .ron"), "{e}");
+    }
+
+    #[test]
+    fn character_scenes_check_their_parts_before_anything_runs() {
+        // The scene in a folder of its own, naming its parts by absolute paths.
+        let parts = assets("").display().to_string();
+        let walk = std::fs::read_to_string(assets("scenes/walk.ron")).unwrap().replace("../", &parts);
+        let at = |name: &str, text: &str| {
+            let p = write(&format!("{name}.ron"), text);
+            load(&p, &LoadOptions::default()).unwrap_err().to_string()
+        };
+        // A controller that is not there.
+        let e = at("missing", &walk.replace("walk-optimised.ron", "nowhere.ron"));
+        assert!(e.contains("controller file") && e.contains("nowhere.ron` not found"), "{e}");
+        // A controller for another figure: its actuators name no actuator of the scene's models.
+        let e = at("wrong", &walk.replace("walk-optimised.ron", "backflip.ron"));
+        assert!(e.contains("names no actuator of the scene's models") && e.contains("line"), "{e}");
+        // A bad value, located.
+        let e = at("dt", &walk.replace("dt: 0.05,", "dt: -0.05,"));
+        assert!(e.contains("world.dt") && e.contains("line 11, column 9"), "{e}");
+    }
+}

@@ -10,6 +10,23 @@
 //!   (cloth has no inside), optional edge lines, and a sky-and-ground background.
 //! - [`LinePlot`] draws [`Series`] with plotters: legend, linear or log axes, clipping to given ranges.
 //! - [`Image::grid`] tiles frames into a sheet; [`Image::label`] writes text on a picture.
+//!
+//! ```
+//! use anima_geom::{DVec3, box_mesh};
+//! use anima_viz::{Camera, LinePlot, RenderMesh, RenderSettings, Series, render};
+//!
+//! let cube = box_mesh(DVec3::ZERO, DVec3::ONE);
+//! let camera = Camera::framing(cube.aabb(), DVec3::new(-1.0, -0.7, -0.5), DVec3::Z, 35.0);
+//! let mut img = render(&[RenderMesh::from_mesh(&cube, [200, 70, 70])], &camera, &RenderSettings::new(160, 120)).unwrap();
+//! img.label(4, 4, "a cube", 12.0).unwrap();
+//! assert_ne!(img.pixel(80, 60), img.pixel(2, 118), "the cube covers the middle of the picture");
+//!
+//! let mut plot = LinePlot::new("x(t)", "t (s)", "x (m)");
+//! plot.series.push(Series::line("cos t", (0..100).map(|i| (i as f64 * 0.1, (i as f64 * 0.1).cos())).collect()));
+//! let mut png = Vec::new();
+//! plot.render(400, 300).unwrap().write_png(&mut png).unwrap();
+//! assert_eq!(&png[1..4], b"PNG");
+//! ```
 
 mod camera;
 mod draw2d;

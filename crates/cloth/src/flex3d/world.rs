@@ -486,7 +486,7 @@ impl Flex3dWorld {
                 match self.options.translation {
                     TranslationMode::Continuous => u += w.per_frame * self.frame_rate,
                     TranslationMode::PerFrameJump => {
-                        if s0 % self.steps_per_frame == 0 {
+                        if s0.is_multiple_of(self.steps_per_frame) {
                             jump += w.per_frame;
                         }
                     }

@@ -322,11 +322,11 @@ impl Optimiser for Cmaes {
                 accepted[k] = true;
             }
         }
-        if let (Some(t), Some((_, b))) = (self.cfg.target, &self.best) {
-            if *b >= t {
-                self.finished = true;
-                return accepted;
-            }
+        if let (Some(t), Some((_, b))) = (self.cfg.target, &self.best)
+            && *b >= t
+        {
+            self.finished = true;
+            return accepted;
         }
 
         // Rank: best first, ties by index (a stable sort).

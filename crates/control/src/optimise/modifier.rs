@@ -18,7 +18,7 @@ pub enum Interval {
     PartiallyReduced { fraction: f64 },
     /// Like `PartiallyReduced`, but evaluation i = 1…N of the stage uses the width
     /// `fraction · width · (1 − (i − 1)/N)`, shrinking linearly towards the current value
-    /// (spec §7.3 [GAP]: linear schedule).
+    /// (spec §7.3 \[GAP\]: linear schedule).
     IterativelyReduced { fraction: f64 },
 }
 

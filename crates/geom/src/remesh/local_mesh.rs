@@ -613,11 +613,11 @@ pub fn mesh_hole_with_retries(
     if let Some((mesh, tries, density)) = fallback {
         return Ok(RetriedMesh { mesh, tries, density, ear_clipped: false });
     }
-    if loops.len() == 1 {
-        if let Some(triangles) = ear_clip(&loops[0]) {
-            let mesh = HoleMesh { points: loops[0].clone(), n_border: loops[0].len(), triangles };
-            return Ok(RetriedMesh { mesh, tries: rule.max_tries, density: d, ear_clipped: true });
-        }
+    if loops.len() == 1
+        && let Some(triangles) = ear_clip(&loops[0])
+    {
+        let mesh = HoleMesh { points: loops[0].clone(), n_border: loops[0].len(), triangles };
+        return Ok(RetriedMesh { mesh, tries: rule.max_tries, density: d, ear_clipped: true });
     }
     Err(LocalMeshError::Stuck(0))
 }

@@ -99,7 +99,7 @@ impl WalkOutcome {
     }
 }
 
-/// The walking evaluation's failure tests (spec §7.6 [GAP] proposals).
+/// The walking evaluation's failure tests (spec §7.6 \[GAP\] proposals).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkRules {
     /// Fallen when the pelvis centre is lower than this, m.
@@ -412,7 +412,7 @@ pub fn thrower_character(controller: Controller) -> Result<Character, CharacterE
     Character::new(world, controller, procedures(), &[])
 }
 
-/// The basket of the throw (spec §8.3, [GAP]: the thesis gives no geometry): hoop centre, m, and
+/// The basket of the throw (spec §8.3, \[GAP\]: the thesis gives no geometry): hoop centre, m, and
 /// the hoop's radius. Eq. 6.1 measures the distance to the point 0.25 m above the hoop centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Basket {
@@ -420,7 +420,7 @@ pub struct Basket {
     pub radius: f64,
 }
 
-/// anima's basket: 2.5 m in front of the thrower, hoop 2.5 m high, radius 0.2 m [GAP].
+/// anima's basket: 2.5 m in front of the thrower, hoop 2.5 m high, radius 0.2 m \[GAP\].
 pub const BASKET: Basket = Basket { hoop: [2.5, 2.5], radius: 0.2 };
 
 /// How a throw ended.
@@ -437,7 +437,7 @@ pub struct ThrowOutcome {
     pub iterations: u64,
 }
 
-/// anima's cap on the height term of Eq. 6.1 [RECON]: H_max counts up to 0.5 m above the point
+/// anima's cap on the height term of Eq. 6.1 \[RECON\]: H_max counts up to 0.5 m above the point
 /// Eq. 6.1 aims at (the point 0.25 m above the hoop). The thesis's weak arms (spec §8.3.3: fitness
 /// 11.042 means H_max ≈ 3.1 m with a near-zero Δ_min) could not throw much higher than the basket;
 /// our stiffer arms (gains ×100) throw the ball 12 m high, where H_max/3 outweighs a 1 m miss and
@@ -453,7 +453,7 @@ impl ThrowOutcome {
         if self.fell { 0.0 } else { 10.0 + self.h_max / 3.0 - self.d_min }
     }
 
-    /// Eq. 6.1 with H_max counted up to `cap` m (anima's [RECON] switch, [`throw_height_cap`]);
+    /// Eq. 6.1 with H_max counted up to `cap` m (anima's \[RECON\] switch, [`throw_height_cap`]);
     /// `None` is the literal Eq. 6.1.
     pub fn fitness_capped(&self, cap: Option<f64>) -> f64 {
         if self.fell { 0.0 } else { 10.0 + self.h_max.min(cap.unwrap_or(f64::INFINITY)) / 3.0 - self.d_min }

@@ -81,9 +81,13 @@ pub fn run(
     let damping = (scene.friction.coefficient > 0.0).then(|| {
         format!("{:?} friction μ = {}", scene.friction.mode, scene.friction.coefficient).to_lowercase()
     });
-    if let Some(w) =
-        stability_warning(scene.integrator, scene.dt_s, world.max_frequency(), damping.as_deref())
-    {
+    if let Some(w) = stability_warning(
+        scene.integrator,
+        scene.dt_s,
+        scene.n_steps(),
+        world.max_frequency(),
+        damping.as_deref(),
+    ) {
         progress.warn(&w);
         warnings.push(w);
     }

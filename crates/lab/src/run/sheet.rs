@@ -60,7 +60,13 @@ pub fn run(
     let omega = anima_ode::stability::max_frequency(&mut sim.network, 0.0, &sim.state.x, &v, &pinned, 60);
     let damping =
         (scene.sheet.damping > 0.0).then(|| format!("spring damping c = {} N·s/m", scene.sheet.damping));
-    if let Some(w) = stability_warning(scene.integrator, scene.dt_s, omega, damping.as_deref()) {
+    if let Some(w) = stability_warning(
+        scene.integrator,
+        scene.dt_s,
+        (scene.duration_s / scene.dt_s).round() as usize,
+        omega,
+        damping.as_deref(),
+    ) {
         progress.warn(&w);
         warnings.push(w);
     }
