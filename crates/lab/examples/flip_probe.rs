@@ -1,5 +1,5 @@
 //! Runs the assisted backflip (`assets/controllers/backflip.ron`) and prints the acrobat's path:
-//! `cargo run --release -p anima-scene --example flip_probe -- [iterations] [spacing]`.
+//! `cargo run --release -p anima-lab --example flip_probe -- [iterations] [spacing]`.
 use anima_lab::nunes;
 
 fn main() {

@@ -1,5 +1,5 @@
 //! Throws with `assets/controllers/throw.ron`, optionally with (s1, e1, s2, e2, τ2) set, and prints
-//! the ball's path: `cargo run --release -p anima-scene --example throw_probe -- [s1 e1 s2 e2 t2]`.
+//! the ball's path: `cargo run --release -p anima-lab --example throw_probe -- [s1 e1 s2 e2 t2]`.
 use anima_control::Selection;
 use anima_lab::nunes;
 

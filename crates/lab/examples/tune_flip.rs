@@ -4,7 +4,7 @@
 //! at the end. Prints the best vector as `label=value` pairs (the overrides `flip_probe` takes); the
 //! numbers were then written into the controller by hand.
 //!
-//! `cargo run --release -p anima-scene --example tune_flip -- [evaluations] [seed] [label=value…]`
+//! `cargo run --release -p anima-lab --example tune_flip -- [evaluations] [seed] [label=value…]`
 use anima_control::Controller;
 use anima_control::optimise::{Cmaes, CmaesConfig, Dim, RunLog, Space, run};
 use anima_lab::nunes;

@@ -3,7 +3,7 @@
 //! distance walked before a fall over several sensor thresholds. Prints the best pose vector; the
 //! numbers were then written into `assets/controllers/walk.ron` by hand.
 //!
-//! `cargo run --release -p anima-scene --example tune_walk -- [evaluations] [iterations]`
+//! `cargo run --release -p anima-lab --example tune_walk -- [evaluations] [iterations]`
 use anima_control::Selection;
 use anima_control::optimise::{Cmaes, CmaesConfig, RunLog, run};
 use anima_lab::nunes::walk_poses::{self, set as set_poses};

@@ -1,4 +1,4 @@
-//! Walks a controller file and prints how far it got: `cargo run --release -p anima-scene --example
+//! Walks a controller file and prints how far it got: `cargo run --release -p anima-lab --example
 //! walk_probe -- assets/controllers/walk.ron [iterations] [p2 p3 p5 p6]`.
 use anima_lab::nunes::{self, WalkRules};
 

@@ -349,7 +349,7 @@ fn flip() -> Result<String> {
     let mut s = String::from("## Backflip assisted by a second humanoid (spec §8.4)\n\n");
     let _ = writeln!(
         s,
-        "Poses re-authored with `crates/scene/examples/tune_flip.rs` (CMA-ES as a tuning aid, spec §8.4.4 \
+        "Poses re-authored with `crates/lab/examples/tune_flip.rs` (CMA-ES as a tuning aid, spec §8.4.4 \
          [RECON]); the thesis's timings except the pusher's T3 (20 iterations, not 50); \
          SIMBICON-style balance feedback on the acrobat's trunk and ankles after the landing (E8, \
          beyond the thesis); spacing {:.2} m; {} iterations.\n",

@@ -257,26 +257,20 @@ impl Overrides {
                     s.gravity_m_s2 = g;
                 }
             }
-            Scene::Body(l) => {
+            Scene::Body(_) | Scene::Character(_) => {
                 if self.integrator.is_some() || self.gravity.is_some() {
                     return Err(not_for("--integrator or --gravity (a figure's world sets them)"));
                 }
+                let (world, scene_duration) = match scene {
+                    Scene::Body(l) => (&mut l.scene.world, &mut l.scene.duration),
+                    Scene::Character(l) => (&mut l.scene.world, &mut l.scene.duration),
+                    _ => unreachable!("matched above"),
+                };
                 if let Some(dt) = dt {
-                    l.scene.world.dt = dt;
+                    world.dt = dt;
                 }
                 if let Some(d) = duration {
-                    l.scene.duration = d;
-                }
-            }
-            Scene::Character(l) => {
-                if self.integrator.is_some() || self.gravity.is_some() {
-                    return Err(not_for("--integrator or --gravity (a figure's world sets them)"));
-                }
-                if let Some(dt) = dt {
-                    l.scene.world.dt = dt;
-                }
-                if let Some(d) = duration {
-                    l.scene.duration = d;
+                    *scene_duration = d;
                 }
             }
         }
