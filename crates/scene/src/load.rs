@@ -150,12 +150,29 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
     match struct_name(text).or_else(|| kind_by_fields(text)) {
         Some("Flex3dScene") => {
             let mut scene = crate::flex3d::from_ron_str(text).map_err(parse)?;
+            for (field, v) in [
+                ("duration_s", scene.duration_s),
+                ("dt_s", scene.dt_s),
+                ("frame_rate_hz", scene.frame_rate_hz),
+            ] {
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(file.invalid_at(
+                        text,
+                        field,
+                        format!("expected a positive number, found {v}"),
+                    ));
+                }
+            }
             if let Some(g) = opts.gravity {
                 scene.gravity_m_s2 = g;
             }
             Ok(Scene::Flex3d(LoadedFlex3d { objects: file.obt_objects(&scene.objects)?, scene }))
         }
-        Some("SheetScene") => Ok(Scene::Sheet(crate::sheet::from_ron_str(text).map_err(parse)?)),
+        Some("SheetScene") => {
+            let scene = crate::sheet::from_ron_str(text).map_err(parse)?;
+            scene.check().map_err(|e| file.description(e.locate(text)))?;
+            Ok(Scene::Sheet(scene))
+        }
         Some("OliveiraScene") => {
             let scene = crate::oliveira::from_ron_str(text).map_err(parse)?;
             Ok(Scene::Oliveira(LoadedOliveira { meshes: file.obj_meshes(&scene)?, scene, remesher: None }))

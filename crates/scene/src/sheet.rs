@@ -35,6 +35,27 @@ impl SheetScene {
     }
 }
 
+impl SheetScene {
+    /// What a run needs that the format cannot say: positive, finite times and a sheet that is one.
+    /// The error names the field (placed at its line by the loader).
+    pub fn check(&self) -> Result<(), anima_format::FieldError> {
+        let bad = |field: &str, expected: &str, v: f64| {
+            Err(anima_format::FieldError::invalid(field, format!("expected {expected}, found {v}")))
+        };
+        for (field, v) in
+            [("duration_s", self.duration_s), ("dt_s", self.dt_s), ("frame_rate_hz", self.frame_rate_hz)]
+        {
+            if !(v > 0.0 && v.is_finite()) {
+                return bad(field, "a positive number", v);
+            }
+        }
+        if self.sheet.n < 2 {
+            return bad("sheet.n", "at least 2 particles per side", self.sheet.n as f64);
+        }
+        Ok(())
+    }
+}
+
 /// Reads a sheet scene; errors name line and column.
 pub fn from_ron_str(src: &str) -> Result<SheetScene, ParseError> {
     anima_format::ron_text::from_str(src)

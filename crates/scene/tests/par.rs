@@ -593,3 +593,27 @@ mod kinds {
         assert!(e.contains("world.dt") && e.contains("line 11, column 9"), "{e}");
     }
 }
+
+#[test]
+fn ron_scenes_with_times_a_run_cannot_use_are_refused_at_their_line() {
+    let dir = std::env::temp_dir().join(format!("anima-scene-times-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    for (rel, from, to, field) in [
+        ("scenes/standard-sheet-32.ron", "dt_s: 0.0002", "dt_s: -0.0002", "dt_s"),
+        ("scenes/standard-sheet-32.ron", "frame_rate_hz: 30.0", "frame_rate_hz: 0.0", "frame_rate_hz"),
+        ("flex3d/curtain.ron", "duration_s: 25.0", "duration_s: inf", "duration_s"),
+    ] {
+        let text = fs::read_to_string(root.join(rel)).unwrap();
+        assert!(text.contains(from), "{rel}");
+        let p = dir.join(Path::new(rel).file_name().unwrap());
+        fs::write(&p, text.replace(from, to)).unwrap();
+        let e = load_flex3d_or_any(&p);
+        assert!(e.contains(&format!("field `{field}`")) && e.contains("line"), "{rel}: {e}");
+    }
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+fn load_flex3d_or_any(p: &Path) -> String {
+    anima_scene::load(p, &LoadOptions::default()).unwrap_err().to_string()
+}
