@@ -6,6 +6,7 @@
 //! Knows nothing about rigid bodies or files: colliders are `anima_geom` meshes handed in by the caller.
 //! Everything is `f64` and stored as flat arrays over all particles of all surfaces.
 
+pub mod contact_mode;
 pub mod flex3d;
 pub mod network_sim;
 pub mod oliveira;

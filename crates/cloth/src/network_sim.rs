@@ -1,10 +1,14 @@
-//! Running a [`SpringNetwork`] with any integrator, with analytic static colliders resolved after each
-//! step (a split: the integrator steps the smooth forces, then contacts project positions and remove the
-//! approaching normal velocity, with Coulomb friction on the tangential part).
+//! Running a [`SpringNetwork`] with any integrator, with analytic static colliders. Contacts are resolved
+//! after each step by default (a split: the integrator steps the smooth forces, then contacts project
+//! positions and remove the approaching normal velocity, with Coulomb friction on the tangential part),
+//! or, with [`ContactMode::InSolve`] and generalised-α, constrained inside the implicit solve
+//! ([`AnalyticContacts`]).
 
 use anima_geom::DVec3;
+use anima_ode::contact::{Contact, ContactModel};
 use anima_ode::{Integrator, OdeError, State, StepStats, Stepper};
 
+use crate::contact_mode::ContactMode;
 use crate::spring_net::SpringNetwork;
 
 /// A static obstacle given analytically.
@@ -54,8 +58,10 @@ impl Collider {
             }
             Collider::Box { min, max } => {
                 let (lo, hi) = (min - DVec3::splat(margin), max + DVec3::splat(margin));
-                // Slab method: the entry parameter is the largest of the per-axis entry parameters.
-                let (mut s_in, mut axis) = (0.0f64, 0usize);
+                // Slab method: the entry parameter is the largest of the per-axis entry parameters, and
+                // its axis the face entered. The largest is taken over every axis (not only positive
+                // ones), so that a path starting on a face is given that face, not the x axis.
+                let (mut s_in, mut axis) = (f64::NEG_INFINITY, 0usize);
                 for k in 0..3 {
                     if d[k] != 0.0 {
                         let (t0, t1) = ((lo[k] - from[k]) / d[k], (hi[k] - from[k]) / d[k]);
@@ -66,7 +72,7 @@ impl Collider {
                         }
                     }
                 }
-                let q = from + d * s_in;
+                let q = from + d * s_in.max(0.0);
                 let mut n = DVec3::ZERO;
                 n[axis] = if d[axis] > 0.0 { -1.0 } else { 1.0 };
                 Some((q, n))
@@ -148,6 +154,8 @@ pub struct NetworkSim {
     pub friction: f64,
     /// Contacts keep particles this far outside colliders, m.
     pub margin: f64,
+    /// Where contacts are answered: after the step (the default) or inside the implicit solve.
+    pub contact: ContactMode,
     step: usize,
     dt: f64,
     pub stats: StepStats,
@@ -165,6 +173,7 @@ impl NetworkSim {
             colliders: Vec::new(),
             friction: 0.0,
             margin: 1e-3,
+            contact: ContactMode::AfterStep,
             step: 0,
             dt,
             stats: StepStats::default(),
@@ -183,14 +192,31 @@ impl NetworkSim {
         &mut self.stepper
     }
 
-    /// One step: integrate, then resolve contacts.
+    /// One step: integrate, then resolve contacts (or integrate with the contacts constrained inside the
+    /// solve, with [`ContactMode::InSolve`]).
     pub fn step(&mut self) -> Result<(), OdeError> {
         let t = self.time();
-        let s = self.stepper.step(&mut self.network, t, self.dt, &self.state, &mut self.scratch)?;
+        let in_solve = self.contact == ContactMode::InSolve && !self.colliders.is_empty();
+        let s = if in_solve {
+            let mut contacts =
+                AnalyticContacts { colliders: &self.colliders, margin: self.margin, friction: self.friction };
+            self.stepper.step_with_contacts(
+                &mut self.network,
+                &mut contacts,
+                t,
+                self.dt,
+                &self.state,
+                &mut self.scratch,
+            )?
+        } else {
+            self.stepper.step(&mut self.network, t, self.dt, &self.state, &mut self.scratch)?
+        };
         self.stats.evaluations += s.evaluations;
         self.stats.solver_iterations += s.solver_iterations;
+        self.stats.contacts = s.contacts;
+        self.stats.late_contacts += s.late_contacts;
         std::mem::swap(&mut self.state, &mut self.scratch);
-        if !self.colliders.is_empty() && self.resolve_contacts() {
+        if !in_solve && !self.colliders.is_empty() && self.resolve_contacts() {
             self.stepper.reset_history();
         }
         self.step += 1;
@@ -237,6 +263,48 @@ impl NetworkSim {
             }
         }
         any
+    }
+}
+
+/// The analytic colliders as the implicit solve sees them: a particle whose path enters a collider
+/// (grown by the margin) is in contact at its entry point, one that ends inside at the nearest point of
+/// the grown surface; Coulomb friction `friction`, no restitution (the split's response removes the
+/// approaching normal velocity too).
+#[derive(Debug, Clone, Copy)]
+pub struct AnalyticContacts<'a> {
+    pub colliders: &'a [Collider],
+    pub margin: f64,
+    pub friction: f64,
+}
+
+impl ContactModel<DVec3> for AnalyticContacts<'_> {
+    fn contacts(&mut self, start: &[DVec3], end: &[DVec3], out: &mut Vec<Contact<DVec3>>) {
+        for (p, (&from, &to)) in start.iter().zip(end).enumerate() {
+            // The earliest entry along the path; failing that, the deepest end inside a collider. Keys
+            // order entries (0, distance along the path) before push-outs (1, −depth).
+            let mut best: Option<((u8, f64), DVec3, DVec3)> = None;
+            for c in self.colliders {
+                let found = match c.entry(from, to, self.margin) {
+                    Some((q, n)) => Some(((0, q.distance(from)), q, n)),
+                    None => c.push_out(to, self.margin).map(|(q, n)| ((1, -q.distance(to)), q, n)),
+                };
+                if let Some(f) = found
+                    && best.is_none_or(|b| f.0 < b.0)
+                {
+                    best = Some(f);
+                }
+            }
+            if let Some((_, point, normal)) = best {
+                out.push(Contact {
+                    coordinate: p as u32,
+                    normal,
+                    point,
+                    static_friction: self.friction,
+                    kinetic_friction: self.friction,
+                    restitution: 0.0,
+                });
+            }
+        }
     }
 }
 

@@ -31,6 +31,10 @@ pub trait Coord:
     fn block_mul(b: Self::Block, c: Self) -> Self;
     /// Bᵀ·c.
     fn block_mul_transpose(b: Self::Block, c: Self) -> Self;
+    /// a bᵀ.
+    fn block_outer(a: Self, b: Self) -> Self::Block;
+    /// A·B.
+    fn block_mul_blocks(a: Self::Block, b: Self::Block) -> Self::Block;
     /// α·A + β·B.
     fn block_combine(a: Self::Block, alpha: f64, b: Self::Block, beta: f64) -> Self::Block;
     /// B⁻¹, or the inverse of its diagonal when B is singular.
@@ -48,6 +52,8 @@ pub trait Coord:
     fn set_component(&mut self, k: usize, value: f64);
     /// Entry (row `r`, column `c`) of a block.
     fn block_entry(b: Self::Block, r: usize, c: usize) -> f64;
+    /// The block with entries `e[r][c]` (only the leading DIM × DIM are read).
+    fn block_from_entries(e: [[f64; 3]; 3]) -> Self::Block;
 }
 
 impl Coord for f64 {
@@ -65,6 +71,10 @@ impl Coord for f64 {
     #[inline]
     fn block_entry(b: f64, _r: usize, _c: usize) -> f64 {
         b
+    }
+    #[inline]
+    fn block_from_entries(e: [[f64; 3]; 3]) -> f64 {
+        e[0][0]
     }
 
     #[inline]
@@ -94,6 +104,14 @@ impl Coord for f64 {
     #[inline]
     fn block_mul_transpose(b: f64, c: f64) -> f64 {
         b * c
+    }
+    #[inline]
+    fn block_outer(a: f64, b: f64) -> f64 {
+        a * b
+    }
+    #[inline]
+    fn block_mul_blocks(a: f64, b: f64) -> f64 {
+        a * b
     }
     #[inline]
     fn block_combine(a: f64, alpha: f64, b: f64, beta: f64) -> f64 {
@@ -129,6 +147,10 @@ impl Coord for DVec3 {
     fn block_entry(b: DMat3, r: usize, c: usize) -> f64 {
         b.col(c)[r]
     }
+    #[inline]
+    fn block_from_entries(e: [[f64; 3]; 3]) -> DMat3 {
+        DMat3::from_cols_array_2d(&e).transpose()
+    }
 
     #[inline]
     fn is_finite(self) -> bool {
@@ -157,6 +179,14 @@ impl Coord for DVec3 {
     #[inline]
     fn block_mul_transpose(b: DMat3, c: DVec3) -> DVec3 {
         b.transpose() * c
+    }
+    #[inline]
+    fn block_outer(a: DVec3, b: DVec3) -> DMat3 {
+        DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+    }
+    #[inline]
+    fn block_mul_blocks(a: DMat3, b: DMat3) -> DMat3 {
+        a * b
     }
     #[inline]
     fn block_combine(a: DMat3, alpha: f64, b: DMat3, beta: f64) -> DMat3 {

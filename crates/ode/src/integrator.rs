@@ -36,10 +36,18 @@ pub enum Integrator {
     /// numerical damping; started (and restarted after a discontinuity or a change of step) by one
     /// implicit Euler step.
     Bdf2,
+    /// Generalised-α (Chung & Hulbert 1993): second order, with the damping of the modes a step cannot
+    /// resolve set by its spectral radius ρ∞ (0 damps them in one step, 1 is the undamped implicit midpoint
+    /// rule; default [`crate::DEFAULT_RHO_INF`], `Stepper::set_spectral_radius`), and barely any damping of
+    /// the ones it resolves. Solved by Newton's method with a line search, by default with conjugate
+    /// gradients and the two-level preconditioner ([`crate::LinearSolver::TwoLevel`]); the one method that
+    /// can constrain contacts inside its solve (`Stepper::step_with_contacts`). The accurate choice for
+    /// large steps.
+    GeneralizedAlpha,
 }
 
 impl Integrator {
-    pub const ALL: [Integrator; 10] = [
+    pub const ALL: [Integrator; 11] = [
         Integrator::ForwardEuler,
         Integrator::SymplecticEuler,
         Integrator::Midpoint,
@@ -50,6 +58,7 @@ impl Integrator {
         Integrator::AdaptiveEuler,
         Integrator::ImplicitEuler,
         Integrator::Bdf2,
+        Integrator::GeneralizedAlpha,
     ];
 
     /// The name used on the command line.
@@ -65,6 +74,7 @@ impl Integrator {
             Integrator::AdaptiveEuler => "adaptive-euler",
             Integrator::ImplicitEuler => "implicit-euler",
             Integrator::Bdf2 => "bdf2",
+            Integrator::GeneralizedAlpha => "generalized-alpha",
         }
     }
 
@@ -75,7 +85,7 @@ impl Integrator {
             Integrator::Midpoint | Integrator::AdamsBashforthMoulton4 | Integrator::AdaptiveEuler => 2,
             Integrator::Rk4 => 4,
             Integrator::DormandPrince => 7,
-            Integrator::ImplicitEuler | Integrator::Bdf2 => 1,
+            Integrator::ImplicitEuler | Integrator::Bdf2 | Integrator::GeneralizedAlpha => 1,
         }
     }
 
@@ -86,7 +96,7 @@ impl Integrator {
             | Integrator::SymplecticEuler
             | Integrator::AdaptiveEuler
             | Integrator::ImplicitEuler => 1,
-            Integrator::Midpoint | Integrator::Bdf2 => 2,
+            Integrator::Midpoint | Integrator::Bdf2 | Integrator::GeneralizedAlpha => 2,
             Integrator::Rk4 | Integrator::AdamsBashforth4 | Integrator::AdamsBashforthMoulton4 => 4,
             Integrator::DormandPrince => 5,
         }
@@ -104,7 +114,7 @@ impl Integrator {
 
     /// Whether the method is implicit (A-stable: no step-size limit from stiffness).
     pub fn is_implicit(self) -> bool {
-        matches!(self, Integrator::ImplicitEuler | Integrator::Bdf2)
+        matches!(self, Integrator::ImplicitEuler | Integrator::Bdf2 | Integrator::GeneralizedAlpha)
     }
 
     /// Whether the method keeps a history of earlier steps that a discontinuity (a collision response, a
@@ -149,6 +159,7 @@ impl FromStr for Integrator {
             "adaptive-euler" => Integrator::AdaptiveEuler,
             "implicit-euler" | "backward-euler" | "implicit" => Integrator::ImplicitEuler,
             "bdf2" | "bdf-2" => Integrator::Bdf2,
+            "generalized-alpha" | "generalised-alpha" | "gen-alpha" | "alpha" => Integrator::GeneralizedAlpha,
             _ => return Err(ParseIntegratorError(s.to_owned())),
         })
     }

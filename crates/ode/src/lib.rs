@@ -25,13 +25,14 @@ mod control;
 mod coord;
 mod implicit;
 mod integrator;
-#[cfg(feature = "sparse-cholesky")]
-mod sparse;
 pub mod stability;
 mod stepper;
 
 pub use control::{IntegrationError, IntegrationStats, StepControl, integrate};
 pub use coord::Coord;
+pub use implicit::alpha::{AlphaParameters, DEFAULT_NEWTON_ITERATIONS, DEFAULT_RHO_INF};
+pub use implicit::contact;
+pub use implicit::workspace::SolveProfile;
 pub use implicit::{Jacobians, LinearSolver, Linearized};
 pub use integrator::{Integrator, ParseIntegratorError};
 pub use stepper::{OdeError, State, StepStats, Stepper};

@@ -5,7 +5,8 @@
     reason = "the loops walk several per-coordinate arrays in step; the index form mirrors the formulas"
 )]
 
-use crate::implicit::ImplicitWorkspace;
+use crate::implicit::contact::ContactModel;
+use crate::implicit::workspace::{ImplicitWorkspace, SolveProfile};
 use crate::{Coord, Integrator, OdeSystem};
 
 /// Positions and velocities of a second-order system.
@@ -50,6 +51,11 @@ pub struct StepStats {
     pub error: Option<f64>,
     /// Conjugate-gradient iterations of an implicit step.
     pub solver_iterations: usize,
+    /// Contacts constrained inside the solve at the end of the step ([`Stepper::step_with_contacts`]).
+    pub contacts: usize,
+    /// Coordinates whose inward normal velocity had to be removed after the Newton iterations because
+    /// their end position would still have crossed a surface.
+    pub late_contacts: usize,
 }
 
 /// Why a step could not be taken.
@@ -63,6 +69,8 @@ pub enum OdeError {
     SolverDidNotConverge { iterations: usize, residual: f64 },
     #[error("the direct solve of an implicit step failed: {0}")]
     Factorization(String),
+    #[error("{0} cannot constrain contacts inside its step; generalized-alpha can")]
+    ContactsUnsupported(Integrator),
 }
 
 /// Butcher tableau of an explicit Runge–Kutta method; `e` holds b − b̂ for an embedded error estimate.
@@ -156,9 +164,11 @@ impl<C: Coord> Stepper<C> {
                 len: 0,
                 h: 0.0,
             }),
-            implicit: integrator
-                .is_implicit()
-                .then(|| ImplicitWorkspace::new(n, integrator == Integrator::Bdf2)),
+            implicit: match integrator {
+                Integrator::GeneralizedAlpha => Some(ImplicitWorkspace::new_alpha(n)),
+                i if i.is_implicit() => Some(ImplicitWorkspace::new(n, i == Integrator::Bdf2)),
+                _ => None,
+            },
         }
     }
 
@@ -167,14 +177,60 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// A fresh stepper for `n_coords` coordinates (after a topology change) with this one's integrator,
-    /// linear solver and Newton iterations; the history starts empty.
+    /// linear solver, Newton iterations, ρ∞ and profiling; the history starts empty.
     pub fn resized(&self, n_coords: usize) -> Self {
         let mut s = Stepper::new(self.integrator, n_coords);
         if let (Some(from), Some(to)) = (&self.implicit, &mut s.implicit) {
             to.solver = from.solver;
             to.newton_iterations = from.newton_iterations;
+            if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
+                b.params = a.params;
+            }
+            to.profile = from.profile.map(|_| SolveProfile::default());
         }
         s
+    }
+
+    /// ρ∞ of generalised-α, the spectral radius of its step at infinite h ω (clamped to [0, 1]): 1 damps
+    /// nothing (the implicit midpoint rule), 0 removes the unresolved modes in one step. The default is
+    /// [`crate::DEFAULT_RHO_INF`]. No effect on other integrators.
+    pub fn set_spectral_radius(&mut self, rho_inf: f64) {
+        if let Some(a) = self.implicit.as_mut().and_then(|w| w.alpha.as_mut()) {
+            a.params = crate::AlphaParameters::new(rho_inf);
+        }
+    }
+
+    /// ρ∞ of generalised-α (`None` for other integrators).
+    pub fn spectral_radius(&self) -> Option<f64> {
+        self.implicit.as_ref().and_then(|w| w.alpha.as_ref()).map(|a| a.params.rho_inf)
+    }
+
+    /// The implicit methods' linear solver (`None` for explicit integrators).
+    pub fn linear_solver(&self) -> Option<crate::LinearSolver> {
+        self.implicit.as_ref().map(|w| w.solver)
+    }
+
+    /// Newton iterations per step of the implicit methods (`None` for explicit integrators).
+    pub fn newton_iterations(&self) -> Option<usize> {
+        self.implicit.as_ref().map(|w| w.newton_iterations)
+    }
+
+    /// Starts (or stops, with `false`) timing where the implicit steps spend their time; see
+    /// [`Stepper::profile`]. Timing changes no result.
+    pub fn set_profiling(&mut self, on: bool) {
+        if let Some(ws) = &mut self.implicit {
+            ws.profile = on.then(SolveProfile::default);
+        }
+    }
+
+    /// The contacts of the last [`Stepper::step_with_contacts`], with their regimes and forces.
+    pub fn contact_reports(&self) -> impl Iterator<Item = crate::contact::ContactReport<C>> + '_ {
+        self.implicit.iter().flat_map(|w| w.contact.reports())
+    }
+
+    /// The time the implicit steps spent, by part, since profiling started.
+    pub fn profile(&self) -> Option<SolveProfile> {
+        self.implicit.as_ref().and_then(|w| w.profile)
     }
 
     pub(crate) fn set_solver(&mut self, solver: crate::LinearSolver) {
@@ -184,8 +240,9 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// Newton iterations per step of the implicit methods (at least 1). Backward Euler defaults to 1,
-    /// Baraff and Witkin's single linearisation; BDF2 to 2. More iterations solve the nonlinear step
-    /// equations more closely, which BDF2 needs to keep its second order on stiff, damped springs.
+    /// Baraff and Witkin's single linearisation; BDF2 to 2; generalised-α to
+    /// [`crate::DEFAULT_NEWTON_ITERATIONS`]. More iterations solve the nonlinear step equations more
+    /// closely, which BDF2 needs to keep its second order on stiff, damped springs.
     pub fn set_newton_iterations(&mut self, iterations: usize) {
         if let Some(ws) = &mut self.implicit {
             ws.newton_iterations = iterations.max(1);
@@ -250,9 +307,55 @@ impl<C: Coord> Stepper<C> {
             Integrator::ImplicitEuler | Integrator::Bdf2 => {
                 let ws = self.implicit.as_mut().expect("allocated for the implicit methods");
                 let lin = sys.linearized().ok_or(OdeError::NoJacobians(self.integrator))?;
-                ws.step(lin, t, h, now, next)?
+                ws.step_euler(lin, t, h, now, next)?
             }
+            Integrator::GeneralizedAlpha => self.alpha_step(sys, None, t, h, now, next)?,
         })
+    }
+
+    /// One step like [`Stepper::step`], with the contacts `contacts` reports constrained inside the
+    /// implicit solve (see [`crate::contact`]): only generalised-α can; other integrators return
+    /// [`OdeError::ContactsUnsupported`].
+    pub fn step_with_contacts<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        contacts: &mut dyn ContactModel<C>,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) -> Result<StepStats, OdeError> {
+        if self.integrator != Integrator::GeneralizedAlpha {
+            return Err(OdeError::ContactsUnsupported(self.integrator));
+        }
+        let n = self.n;
+        assert!(
+            sys.n_coords() == n && now.len() == n && next.len() == n,
+            "the stepper, the system and both states must have the same size"
+        );
+        self.alpha_step(sys, Some(contacts), t, h, now, next)
+    }
+
+    fn alpha_step<S: OdeSystem<Coord = C> + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        contacts: Option<&mut dyn ContactModel<C>>,
+        t: f64,
+        h: f64,
+        now: &State<C>,
+        next: &mut State<C>,
+    ) -> Result<StepStats, OdeError> {
+        let ws = self.implicit.as_mut().expect("allocated for the implicit methods");
+        let mut extra = 0;
+        if ws.alpha_needs_acceleration() {
+            // The method's acceleration starts as M⁻¹ f, after a start or a reset.
+            sys.acceleration(t, &now.x, &now.v, ws.alpha_acceleration_mut());
+            extra = 1;
+        }
+        let lin = sys.linearized().ok_or(OdeError::NoJacobians(self.integrator))?;
+        let mut stats = ws.step_alpha(lin, contacts, t, h, now, next)?;
+        stats.evaluations += extra;
+        Ok(stats)
     }
 
     /// Classical RK4 given a = a(t, x, v) already in `self.a`. Increments are accumulated in (dx, dv) with
@@ -340,7 +443,7 @@ impl<C: Coord> Stepper<C> {
                 error = error.max(ex.max_abs()).max(h * ev.max_abs());
             }
         }
-        StepStats { evaluations: tab.c.len(), error: tab.e.map(|_| error), solver_iterations: 0 }
+        StepStats { evaluations: tab.c.len(), error: tab.e.map(|_| error), ..Default::default() }
     }
 
     /// Adams–Bashforth 4, or the PECE Adams–Bashforth–Moulton 4 pair; RK4 while the history fills.
@@ -412,6 +515,6 @@ impl<C: Coord> Stepper<C> {
         for i in 0..n {
             fprime = fprime.max(self.a[i].max_abs()).max((self.vs[i] - self.a[i]).max_abs());
         }
-        StepStats { evaluations: 2, error: Some(0.5 * h * h * fprime), solver_iterations: 0 }
+        StepStats { evaluations: 2, error: Some(0.5 * h * h * fprime), ..Default::default() }
     }
 }

@@ -198,8 +198,9 @@ fn an_indefinite_system_falls_back_to_ldlt_and_is_solved_exactly() {
 fn solver_names_parse() {
     assert_eq!("cholesky".parse::<LinearSolver>(), Ok(LinearSolver::SparseCholesky));
     assert_eq!("cg".parse::<LinearSolver>(), Ok(LinearSolver::default_cg()));
-    assert!("lu".parse::<LinearSolver>().unwrap_err().contains("expected `cg` or `cholesky`"));
-    for s in [LinearSolver::SparseCholesky, LinearSolver::default_cg()] {
+    assert_eq!("two-level".parse::<LinearSolver>(), Ok(LinearSolver::default_two_level()));
+    assert!("lu".parse::<LinearSolver>().unwrap_err().contains("expected `cg`, `cholesky` or `two-level`"));
+    for s in [LinearSolver::SparseCholesky, LinearSolver::default_cg(), LinearSolver::default_two_level()] {
         assert_eq!(s.name().parse::<LinearSolver>(), Ok(s));
     }
 }

@@ -1,4 +1,4 @@
-//! The direct solver of implicit Euler: the block system A Δv = b assembled as a scalar sparse matrix
+//! The direct solver of the implicit steps: the block system A Δv = b assembled as a scalar sparse matrix
 //! (upper triangle, compressed columns) and factorised by faer's sparse Cholesky.
 //!
 //! Why a direct solver beside conjugate gradients: CG's cost grows with the condition number of A, which
@@ -27,6 +27,8 @@ use faer::{Conj, MatMut, Par, Side};
 
 use crate::Coord;
 
+use super::system::Filter;
+
 /// No slot: an entry of a diagonal block below its diagonal (only the upper triangle is stored).
 const NONE: usize = usize::MAX;
 
@@ -53,7 +55,14 @@ pub(crate) struct SparseSolver {
     l_values: Vec<f64>,
     buffer: MemBuffer,
     rhs: Vec<f64>,
+    /// Scalar size of a block (`C::DIM` of the coordinates it was built for).
+    dim: usize,
+    /// The kind of the last numeric factorisation.
+    kind: Factorization,
 }
+
+/// Right-hand sides one call to [`SparseSolver::solve_in_place`] may solve at once.
+pub(crate) const MAX_RHS: usize = 3;
 
 impl std::fmt::Debug for SparseSolver {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -134,7 +143,7 @@ impl SparseSolver {
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, par),
+            symbolic.solve_in_place_scratch::<f64>(MAX_RHS, par),
         ]);
         let buffer = MemBuffer::try_new(req).map_err(|e| err(&e))?;
         Ok(Self {
@@ -147,6 +156,8 @@ impl SparseSolver {
             symbolic,
             buffer,
             rhs: vec![0.0; size],
+            dim: d,
+            kind: Factorization::Cholesky,
         })
     }
 
@@ -156,44 +167,89 @@ impl SparseSolver {
     }
 
     /// Solves A Δv = b for the block matrix with diagonal `a_diag` and off-diagonal blocks `a_off` on
-    /// the pattern, prescribed blocks eliminated (Δv = 0 there; `b` must already be zero there).
+    /// the pattern, filtered: S A S + (I − S) is factorised, so Δv has no component outside the free
+    /// directions (`b` must already be filtered).
     pub fn solve<C: Coord>(
         &mut self,
         a_diag: &[C::Block],
         a_off: &[C::Block],
-        prescribed: &[bool],
+        filter: Filter<'_, C>,
         b: &[C],
         dv: &mut [C],
     ) -> Result<Factorization, SparseSolveError> {
+        let kind = self.factorize::<C>(a_diag, a_off, filter)?;
         let d = C::DIM;
-        let values = self.matrix.val_mut();
-        values.fill(0.0);
-        for (i, (&block, &fixed)) in a_diag.iter().zip(prescribed).enumerate() {
-            for r in 0..d {
-                for c in r..d {
-                    let s = self.diag_slots[(i * d + r) * d + c];
-                    values[s] +=
-                        if fixed { if r == c { 1.0 } else { 0.0 } } else { C::block_entry(block, r, c) };
-                }
-            }
-        }
-        for (e, (&(i, j), &block)) in self.pattern.iter().zip(a_off).enumerate() {
-            if prescribed[i as usize] || prescribed[j as usize] {
-                continue;
-            }
-            for r in 0..d {
-                for c in 0..d {
-                    values[self.off_slots[(e * d + r) * d + c]] += C::block_entry(block, r, c);
-                }
-            }
-        }
         for (i, bi) in b.iter().enumerate() {
             for k in 0..d {
                 self.rhs[i * d + k] = bi.component(k);
             }
         }
+        let mut rhs = std::mem::take(&mut self.rhs);
+        self.solve_in_place(&mut rhs, 1);
+        self.rhs = rhs;
+        for (i, v) in dv.iter_mut().enumerate() {
+            for k in 0..d {
+                v.set_component(k, self.rhs[i * d + k]);
+            }
+        }
+        Ok(kind)
+    }
+
+    /// Assembles and factorises the filtered matrix S A S + (I − S) (numeric factorisation on the kept
+    /// symbolic one): LLᵀ, or LDLᵀ when it is not numerically positive definite. A prescribed
+    /// coordinate's rows and columns become those of the identity.
+    pub fn factorize<C: Coord>(
+        &mut self,
+        a_diag: &[C::Block],
+        a_off: &[C::Block],
+        filter: Filter<'_, C>,
+    ) -> Result<Factorization, SparseSolveError> {
+        let d = C::DIM;
+        let values = self.matrix.val_mut();
+        values.fill(0.0);
+        let identity = C::block_identity(1.0);
+        // S_i, and whether it is the identity (most coordinates), so the common case costs no products.
+        let projector = |i: usize| -> (C::Block, bool) {
+            match filter {
+                Filter::None => (identity, true),
+                Filter::Prescribed(fixed) => {
+                    if fixed[i] {
+                        (C::block_identity(0.0), false)
+                    } else {
+                        (identity, true)
+                    }
+                }
+                Filter::Projected(s) => (s[i], false),
+            }
+        };
+        for (i, &block) in a_diag.iter().enumerate() {
+            let (s, free) = projector(i);
+            // S A S + (I − S), the identity on the constrained directions.
+            let filtered = if free {
+                block
+            } else {
+                let sas = C::block_mul_blocks(s, C::block_mul_blocks(block, s));
+                C::block_combine(sas, 1.0, C::block_combine(identity, 1.0, s, -1.0), 1.0)
+            };
+            for r in 0..d {
+                for c in r..d {
+                    values[self.diag_slots[(i * d + r) * d + c]] += C::block_entry(filtered, r, c);
+                }
+            }
+        }
+        for (e, (&(i, j), &block)) in self.pattern.iter().zip(a_off).enumerate() {
+            let ((si, free_i), (sj, free_j)) = (projector(i as usize), projector(j as usize));
+            let filtered = match (free_i, free_j) {
+                (true, true) => block,
+                _ => C::block_mul_blocks(si, C::block_mul_blocks(block, sj)),
+            };
+            for r in 0..d {
+                for c in 0..d {
+                    values[self.off_slots[(e * d + r) * d + c]] += C::block_entry(filtered, r, c);
+                }
+            }
+        }
         let par = Par::Seq;
-        let size = self.rhs.len();
         let stack = MemStack::new(&mut self.buffer);
         let positive_definite = self
             .symbolic
@@ -207,10 +263,7 @@ impl SparseSolver {
                 Default::default(),
             )
             .is_ok();
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, size, 1);
-        if positive_definite {
-            LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
-        } else {
+        if !positive_definite {
             self.symbolic
                 .factorize_numeric_ldlt::<f64>(
                     &mut self.l_values,
@@ -222,14 +275,33 @@ impl SparseSolver {
                     Default::default(),
                 )
                 .map_err(|e| SparseSolveError::Factorization(format!("{e:?}")))?;
-            LdltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
         }
-        for (i, v) in dv.iter_mut().enumerate() {
-            for k in 0..d {
-                v.set_component(k, self.rhs[i * d + k]);
-            }
+        self.kind = if positive_definite { Factorization::Cholesky } else { Factorization::Ldlt };
+        Ok(self.kind)
+    }
+
+    /// Solves in place for `n_rhs` right-hand sides stored column after column in `rhs` (each of the
+    /// matrix's scalar size), with the last factorisation.
+    pub fn solve_in_place(&mut self, rhs: &mut [f64], n_rhs: usize) {
+        let size = self.n_blocks * self.dim;
+        debug_assert!(n_rhs <= MAX_RHS && rhs.len() == size * n_rhs);
+        let par = Par::Seq;
+        let stack = MemStack::new(&mut self.buffer);
+        let rhs = MatMut::from_column_major_slice_mut(rhs, size, n_rhs);
+        match self.kind {
+            Factorization::Cholesky => LltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                par,
+                stack,
+            ),
+            Factorization::Ldlt => LdltRef::new(&self.symbolic, &self.l_values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                par,
+                stack,
+            ),
         }
-        Ok(if positive_definite { Factorization::Cholesky } else { Factorization::Ldlt })
     }
 }
 

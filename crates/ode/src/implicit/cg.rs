@@ -1,0 +1,118 @@
+//! Filtered, preconditioned conjugate gradients for A δ = b (Baraff & Witkin 1998, §5.3: the filter S
+//! keeps every iterate inside the free directions, so constrained directions stay exactly as given).
+
+#![allow(
+    clippy::needless_range_loop,
+    reason = "the loops walk several per-coordinate arrays in step; the index form mirrors the formulas"
+)]
+
+use crate::Coord;
+
+use super::system::{Filter, SystemMatrix};
+
+/// A symmetric positive definite approximation P⁻¹ of A⁻¹.
+pub(crate) trait Preconditioner<C: Coord> {
+    /// z = S P⁻¹ r for a residual r that is already filtered.
+    fn apply(
+        &mut self,
+        a: &SystemMatrix<C>,
+        pattern: &[(u32, u32)],
+        filter: Filter<'_, C>,
+        r: &[C],
+        z: &mut [C],
+    );
+}
+
+/// Block Jacobi: P = the diagonal blocks of A.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct BlockJacobi;
+
+impl<C: Coord> Preconditioner<C> for BlockJacobi {
+    fn apply(&mut self, a: &SystemMatrix<C>, _: &[(u32, u32)], filter: Filter<'_, C>, r: &[C], z: &mut [C]) {
+        for i in 0..r.len() {
+            z[i] = filter.one(i, C::block_mul(a.jacobi[i], r[i]));
+        }
+    }
+}
+
+/// The vectors of one solve, kept between solves.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct CgBuffers<C> {
+    r: Vec<C>,
+    z: Vec<C>,
+    p: Vec<C>,
+    q: Vec<C>,
+}
+
+/// How a solve ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct CgOutcome {
+    pub iterations: usize,
+    /// ‖r‖/‖b‖ at the end.
+    pub relative_residual: f64,
+    /// Whether the residual reached the tolerance; false also when A turned out not to be positive
+    /// definite along a search direction (the iterate is then the last good one).
+    pub converged: bool,
+}
+
+fn dot<C: Coord>(a: &[C], b: &[C]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>()
+}
+
+/// Solves A x = b to ‖b − A x‖ ≤ `tol`·‖b‖, starting from the given x (filtered). `b` must be filtered.
+#[expect(clippy::too_many_arguments, reason = "the system, its filter, the preconditioner and the controls")]
+pub(crate) fn pcg<C: Coord>(
+    a: &SystemMatrix<C>,
+    pattern: &[(u32, u32)],
+    filter: Filter<'_, C>,
+    precond: &mut dyn Preconditioner<C>,
+    b: &[C],
+    x: &mut [C],
+    buf: &mut CgBuffers<C>,
+    tol: f64,
+    max_iter: usize,
+) -> CgOutcome {
+    let n = b.len();
+    for v in [&mut buf.r, &mut buf.z, &mut buf.p, &mut buf.q] {
+        v.resize(n, C::default());
+    }
+    let b_norm2 = dot(b, b);
+    if b_norm2 == 0.0 {
+        x.fill(C::default());
+        return CgOutcome { iterations: 0, relative_residual: 0.0, converged: true };
+    }
+    // r = b − A x₀
+    a.mul(pattern, filter, x, &mut buf.q);
+    for i in 0..n {
+        buf.r[i] = b[i] - buf.q[i];
+    }
+    precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
+    buf.p.copy_from_slice(&buf.z);
+    let mut rz = dot(&buf.r, &buf.z);
+    let target = tol * tol * b_norm2;
+    let mut r2 = dot(&buf.r, &buf.r);
+    for it in 0..max_iter {
+        if r2 <= target {
+            return CgOutcome { iterations: it, relative_residual: (r2 / b_norm2).sqrt(), converged: true };
+        }
+        a.mul(pattern, filter, &buf.p, &mut buf.q);
+        let pq = dot(&buf.p, &buf.q);
+        if pq.is_nan() || pq <= 0.0 {
+            return CgOutcome { iterations: it, relative_residual: (r2 / b_norm2).sqrt(), converged: false };
+        }
+        let alpha = rz / pq;
+        for i in 0..n {
+            x[i] += buf.p[i] * alpha;
+            buf.r[i] = buf.r[i] - buf.q[i] * alpha;
+        }
+        precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
+        let rz_new = dot(&buf.r, &buf.z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            buf.p[i] = buf.z[i] + buf.p[i] * beta;
+        }
+        r2 = dot(&buf.r, &buf.r);
+    }
+    CgOutcome { iterations: max_iter, relative_residual: (r2 / b_norm2).sqrt(), converged: r2 <= target }
+}

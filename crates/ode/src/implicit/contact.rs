@@ -1,0 +1,283 @@
+//! Contact with static surfaces inside an implicit step: velocity constraints in the Newton solve.
+//!
+//! A coordinate in contact has its velocity at the end of the step constrained, the way Baraff & Witkin
+//! (1998, §5.3) constrain cloth particles: its normal component along the surface's outward normal n
+//! is prescribed, w·n = u, and while it sticks its tangential components are too (w_t = 0 on a static
+//! surface). The solve filters those directions out (S_i = I − n nᵀ, or 0 when sticking) and imposes
+//! the prescribed change z_i on them, so every Newton iterate meets the constraints exactly. Here u is
+//! the smallest normal velocity that leaves the end-of-step position on the outer side of the surface's
+//! tangent plane, x(t + h) = X₁ + c w: u = −n·(X₁ − p)/c, p a surface point moved out by the contact's
+//! thickness; with a restitution e > 0 an approaching particle leaves with at least −e (n·v₀) instead.
+//!
+//! The constraint force follows from the residual: at a solution M (w − W₀) = η (f + F_c), so after each
+//! iterate F_c = (M (w − W₀) − η f)/η on the constrained coordinates. An active set decides the
+//! regimes between Newton iterations (Coulomb friction at the velocity level):
+//!
+//! - a free coordinate whose iterate ends beyond the surface becomes active, sticking if μ_s > 0;
+//! - an active one whose constraint would pull (F_c·n < 0) is released;
+//! - a sticking one whose tangential force exceeds μ_s F_n slides, its friction force μ_k F_n against
+//!   the direction the constraint held it in; a sliding one feels −μ_k F_n t̂ (t̂ the direction of its
+//!   tangential velocity, F_n from the last iterate) as an applied force, and sticks again when its
+//!   tangential velocity turns against that force.
+//!
+//! After the last Newton iteration every reported contact is checked once more and a coordinate that
+//! would still end beyond its tangent plane has its inward normal velocity removed, so that no step
+//! ends inside an object (up to the planar approximation, which the caller's model refreshes every
+//! step).
+
+#![allow(
+    clippy::needless_range_loop,
+    reason = "the loops walk several per-coordinate arrays in step; the index form mirrors the formulas"
+)]
+
+use crate::Coord;
+
+/// A coordinate in contact with a static surface, as a [`ContactModel`] reports it for one step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact<C> {
+    pub coordinate: u32,
+    /// Unit outward normal of the surface.
+    pub normal: C,
+    /// A point of the surface (locally a plane) moved out along the normal by the contact's thickness:
+    /// the step keeps n·(x(t + h) − point) ≥ 0.
+    pub point: C,
+    /// Coulomb coefficients: sticking holds while |F_t| ≤ μ_s F_n; sliding feels μ_k F_n.
+    pub static_friction: f64,
+    pub kinetic_friction: f64,
+    /// Normal restitution e: an approaching coordinate leaves with a normal velocity of at least
+    /// −e (n·v(t)). 0 is a perfectly inelastic contact.
+    pub restitution: f64,
+}
+
+/// Where a system meets static objects: the geometry the implicit step asks for contacts.
+pub trait ContactModel<C: Coord> {
+    /// The contacts of the motion from `start` (positions at t) to `end` (a Newton iterate's positions
+    /// at t + h): every free coordinate whose path crosses a surface or that ends inside, or within the
+    /// model's reach of, one; at most one contact per coordinate, appended to `out` (which the caller
+    /// clears) in increasing coordinate order.
+    fn contacts(&mut self, start: &[C], end: &[C], out: &mut Vec<Contact<C>>);
+}
+
+/// The regime of one contact within a step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Regime {
+    /// Reported, not constrained (separating, or released).
+    Free,
+    /// Normal velocity prescribed, tangential free under kinetic friction.
+    Slide,
+    /// Whole velocity prescribed.
+    Stick,
+}
+
+/// What became of one contact in the last step ([`crate::Stepper::contact_reports`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactReport<C> {
+    pub coordinate: u32,
+    pub regime: Regime,
+    /// The force the constraint exerted, N (zero when free).
+    pub force: C,
+}
+
+/// One contact during a step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Slot<C> {
+    pub contact: Contact<C>,
+    pub regime: Regime,
+    /// Whether the constraint was imposed in the last solve (its reaction is meaningful).
+    pub imposed: bool,
+    /// Released this step because it pulled: it is activated again only by a clear violation.
+    pub released: bool,
+    /// Regime changes this step (capped, so that an active set cannot cycle for ever).
+    pub switches: u8,
+    /// The normal velocity the constraint prescribes.
+    pub target: f64,
+    /// Kinetic friction force on a sliding coordinate, N.
+    pub friction: C,
+    /// The last reaction F_c, N.
+    pub reaction: C,
+}
+
+/// Tangential speed below which a sliding contact counts as stopped, m/s.
+const SPEED_FLOOR: f64 = 1e-6;
+
+/// Regime changes allowed per contact and step.
+const MAX_SWITCHES: u8 = 4;
+
+/// A violation larger than this fraction of the target speed scale re-activates a released contact.
+const REACTIVATE: f64 = 1e-3;
+
+/// The contacts of the step in progress and the filter they make.
+#[derive(Debug, Clone)]
+pub(crate) struct ContactState<C: Coord> {
+    pub found: Vec<Contact<C>>,
+    pub slots: Vec<Slot<C>>,
+    /// Per coordinate, its slot + 1 (0: none).
+    pub slot_of: Vec<u32>,
+    /// Per coordinate, S_i.
+    pub filter: Vec<C::Block>,
+    /// Per coordinate, the prescribed change along the constrained directions.
+    pub z: Vec<C>,
+    /// Coordinates whose end position had to be corrected after the last iteration.
+    pub late: usize,
+    /// The coordinates in contact at the end of the step, their normals and the normal velocity each
+    /// must leave with at least (0, or the restitution's bounce).
+    pub clamp: Vec<(u32, C, f64)>,
+}
+
+impl<C: Coord> ContactState<C> {
+    pub fn new() -> Self {
+        Self {
+            found: Vec::new(),
+            slots: Vec::new(),
+            slot_of: Vec::new(),
+            filter: Vec::new(),
+            z: Vec::new(),
+            late: 0,
+            clamp: Vec::new(),
+        }
+    }
+
+    /// Starts a step: no contacts, every prescribed coordinate filtered out.
+    pub fn begin(&mut self, prescribed: &[bool]) {
+        let n = prescribed.len();
+        self.slots.clear();
+        self.slot_of.clear();
+        self.slot_of.resize(n, 0);
+        self.filter.clear();
+        self.filter.extend(prescribed.iter().map(|&p| C::block_identity(if p { 0.0 } else { 1.0 })));
+        self.z.clear();
+        self.z.resize(n, C::default());
+        self.late = 0;
+        self.clamp.clear();
+    }
+
+    /// Merges the contacts just found: new ones start free, known ones take the fresh geometry.
+    pub fn merge(&mut self, prescribed: &[bool]) {
+        for c in &self.found {
+            let i = c.coordinate as usize;
+            if prescribed[i] {
+                continue;
+            }
+            match self.slot_of[i] {
+                0 => {
+                    self.slots.push(Slot {
+                        contact: *c,
+                        regime: Regime::Free,
+                        imposed: false,
+                        released: false,
+                        switches: 0,
+                        target: 0.0,
+                        friction: C::default(),
+                        reaction: C::default(),
+                    });
+                    self.slot_of[i] = self.slots.len() as u32;
+                }
+                s => self.slots[s as usize - 1].contact = *c,
+            }
+        }
+    }
+
+    /// The active-set update between Newton iterations, from the iterate `w`, the affine map to the
+    /// end position x(t + h) = `x1` + `c`·w, the start velocity `v0`, and the residual `b` = η (f + friction)
+    /// − M (w − W₀) just computed at `w` (before filtering). Sets the filter, the prescribed changes and
+    /// the friction forces (returned through `friction_into_b`, to be added to b times η).
+    /// Returns whether any regime changed.
+    pub fn update(&mut self, w: &[C], x1: &[C], c: f64, v0: &[C], b: &[C], eta: f64) -> bool {
+        let tangential_speed_floor = SPEED_FLOOR;
+        let mut changed = false;
+        for slot in &mut self.slots {
+            let i = slot.contact.coordinate as usize;
+            let n = slot.contact.normal;
+            // The geometric bound decides whether the contact is needed; once it is, an approaching
+            // coordinate leaves with at least its restitution.
+            let geometric = -n.dot(x1[i] - slot.contact.point) / c;
+            let approach = n.dot(v0[i]).min(0.0);
+            let bounce = -slot.contact.restitution * approach;
+            let wn = n.dot(w[i]);
+            if slot.imposed {
+                // The reaction the constraint supplied at this iterate: F_c = −b/η − (the friction force
+                // applied last iteration, which b does not hold yet).
+                slot.reaction = b[i] * (-1.0 / eta) - slot.friction;
+            }
+            let fn_ = slot.reaction.dot(n);
+            let can_switch = slot.switches < MAX_SWITCHES;
+            let mut next = slot.regime;
+            match slot.regime {
+                Regime::Free => {
+                    let violation = geometric - wn;
+                    let scale = geometric.abs().max(tangential_speed_floor);
+                    if violation > 0.0 && (!slot.released || violation > REACTIVATE * scale) {
+                        next = if slot.contact.static_friction > 0.0 { Regime::Stick } else { Regime::Slide };
+                    }
+                }
+                Regime::Stick | Regime::Slide if slot.imposed && fn_ < 0.0 => {
+                    next = Regime::Free;
+                    slot.released = true;
+                }
+                Regime::Stick if slot.imposed => {
+                    let ft = slot.reaction - n * fn_;
+                    let limit = slot.contact.static_friction * fn_;
+                    let size = ft.dot(ft).sqrt();
+                    if size > limit {
+                        next = Regime::Slide;
+                        // Friction keeps acting where the constraint held, at the kinetic level.
+                        slot.friction = ft * (slot.contact.kinetic_friction * fn_ / size);
+                    }
+                }
+                Regime::Slide if slot.imposed => {
+                    let wt = w[i] - n * wn;
+                    let speed = wt.dot(wt).sqrt();
+                    let mu = slot.contact.kinetic_friction * fn_.max(0.0);
+                    if speed > tangential_speed_floor {
+                        let turned = slot.friction.dot(wt) > 0.0;
+                        if turned && slot.contact.static_friction > 0.0 {
+                            next = Regime::Stick;
+                        } else {
+                            slot.friction = wt * (-mu / speed);
+                        }
+                    } else if slot.contact.static_friction > 0.0 {
+                        next = Regime::Stick;
+                    }
+                }
+                _ => {}
+            }
+            if next != slot.regime && can_switch {
+                slot.regime = next;
+                slot.switches += 1;
+                changed = true;
+            }
+            if slot.regime != Regime::Slide {
+                slot.friction = C::default();
+            }
+            // With no restitution the bound is the geometric one alone: its velocity may still point
+            // into the surface at the end of the step (the position is on it), which the step's end
+            // removes (`clamp`).
+            let target = if bounce > 0.0 { geometric.max(bounce) } else { geometric };
+            slot.target = target;
+            // The filter and the prescribed change.
+            let identity = C::block_identity(1.0);
+            let nn = C::block_outer(n, n);
+            (self.filter[i], self.z[i]) = match slot.regime {
+                Regime::Free => (identity, C::default()),
+                Regime::Slide => (C::block_combine(identity, 1.0, nn, -1.0), n * (target - wn)),
+                Regime::Stick => (C::block_identity(0.0), n * target - w[i]),
+            };
+            slot.imposed = slot.regime != Regime::Free;
+        }
+        changed
+    }
+
+    /// The contacts of the last step.
+    pub fn reports(&self) -> impl Iterator<Item = ContactReport<C>> + '_ {
+        self.slots.iter().map(|s| ContactReport {
+            coordinate: s.contact.coordinate,
+            regime: s.regime,
+            force: if s.regime == Regime::Free { C::default() } else { s.reaction },
+        })
+    }
+
+    /// Active contacts now.
+    pub fn active(&self) -> usize {
+        self.slots.iter().filter(|s| s.regime != Regime::Free).count()
+    }
+}

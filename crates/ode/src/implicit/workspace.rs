@@ -1,0 +1,205 @@
+//! Everything an implicit step keeps between calls: the system's blocks, the solvers' buffers and
+//! caches, the methods' histories, and an optional profile of where the time went.
+
+use std::time::Instant;
+
+use crate::Coord;
+use crate::stepper::{OdeError, State};
+
+use super::alpha::AlphaState;
+use super::cg::{BlockJacobi, CgBuffers, CgOutcome, pcg};
+use super::contact::ContactState;
+use super::system::{Filter, SystemMatrix};
+use super::{Jacobians, LinearSolver};
+
+/// Where the time of the implicit steps went, s (opt-in: [`crate::Stepper::set_profiling`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveProfile {
+    /// Steps profiled.
+    pub steps: usize,
+    /// Newton iterations (each one force-and-Jacobian evaluation and one linear solve).
+    pub newton_iterations: usize,
+    /// Force and Jacobian evaluation and assembly of A.
+    pub assembly_s: f64,
+    /// Preconditioner or factorisation set-up (numeric factorisations).
+    pub setup_s: f64,
+    /// The linear solves themselves (CG iterations, triangular solves).
+    pub solve_s: f64,
+    /// Contact detection and the active-set logic.
+    pub contact_s: f64,
+    /// Linear-solver iterations (CG).
+    pub solver_iterations: usize,
+    /// Numeric factorisations (Cholesky, or the two-level preconditioner's refreshes).
+    pub factorizations: usize,
+}
+
+/// Scratch and caches of the implicit methods.
+#[derive(Debug, Clone)]
+pub(crate) struct ImplicitWorkspace<C: Coord> {
+    pub solver: LinearSolver,
+    /// Newton iterations per step: 1 (backward Euler's default) is Baraff–Witkin's single linearisation;
+    /// BDF2 defaults to 2, since one linearisation about the start of the step costs it its second order
+    /// on stiff, damped springs (measured on the Oliveira sheet of `cargo xtask bench`); generalised-α
+    /// to [`super::alpha::DEFAULT_NEWTON_ITERATIONS`].
+    pub newton_iterations: usize,
+    pub(super) f: Vec<C>,
+    pub(super) jac: Jacobians<C>,
+    pub(super) a: SystemMatrix<C>,
+    pub(super) b: Vec<C>,
+    /// Δv, kept between steps as the next solve's first guess.
+    pub(super) dv: Vec<C>,
+    pub(super) cg: CgBuffers<C>,
+    #[cfg(feature = "sparse-cholesky")]
+    pub(super) direct: super::cholesky::DirectCache,
+    #[cfg(feature = "sparse-cholesky")]
+    pub(super) two_level: Option<super::two_level::TwoLevel<C>>,
+    /// BDF2 only: the state one step back, and the step that led from it (0 when there is none).
+    pub(super) bdf2: Option<State<C>>,
+    pub(super) prev_h: f64,
+    /// Backward Euler and BDF2: x̂ − x₀ + β v₀ (the vector K multiplies on the right-hand side), then v̂.
+    /// Generalised-α: the velocity at which the force is evaluated.
+    pub(super) w: Vec<C>,
+    /// Positions of the current Newton iterate.
+    pub(super) xk: Vec<C>,
+    /// Generalised-α only.
+    pub(crate) alpha: Option<AlphaState<C>>,
+    pub(crate) contact: ContactState<C>,
+    /// Generalised-α's line search: the iterate before the step, and the Newton step.
+    pub(super) trial: Vec<C>,
+    pub(super) delta: Vec<C>,
+    pub(crate) profile: Option<SolveProfile>,
+}
+
+impl<C: Coord> ImplicitWorkspace<C> {
+    /// Backward Euler (`bdf2` false) or BDF2.
+    pub fn new(n: usize, bdf2: bool) -> Self {
+        let zeros = || vec![C::default(); n];
+        Self {
+            solver: LinearSolver::default_cg(),
+            newton_iterations: if bdf2 { 2 } else { 1 },
+            f: zeros(),
+            jac: Jacobians::new(n, 0),
+            a: SystemMatrix::new(),
+            b: zeros(),
+            dv: zeros(),
+            cg: CgBuffers::default(),
+            #[cfg(feature = "sparse-cholesky")]
+            direct: Default::default(),
+            #[cfg(feature = "sparse-cholesky")]
+            two_level: None,
+            bdf2: bdf2.then(|| State::zeros(n)),
+            prev_h: 0.0,
+            w: zeros(),
+            xk: zeros(),
+            alpha: None,
+            contact: ContactState::new(),
+            trial: Vec::new(),
+            delta: Vec::new(),
+            profile: None,
+        }
+    }
+
+    /// Forgets the methods' histories: BDF2 restarts with a backward Euler step, generalised-α takes its
+    /// acceleration from the force again.
+    pub fn reset_history(&mut self) {
+        self.prev_h = 0.0;
+        if let Some(a) = &mut self.alpha {
+            a.valid = false;
+        }
+    }
+
+    /// Solves A δ = b (both filtered) into `self.dv` with the chosen solver, starting CG from the δ
+    /// already there. Returns the solver's iterations (0 for the direct one). With `strict`, CG that
+    /// stops short of its tolerance is an error (backward Euler's and BDF2's contract); otherwise the
+    /// last iterate is used, which is what an inexact Newton iteration wants.
+    #[cfg_attr(
+        not(feature = "sparse-cholesky"),
+        expect(unused_variables, reason = "the masses and the prescribed set serve the sparse solvers only")
+    )]
+    pub(super) fn solve(
+        &mut self,
+        pattern: &[(u32, u32)],
+        filter: Filter<'_, C>,
+        masses: &[f64],
+        prescribed: &[bool],
+        strict: bool,
+    ) -> Result<usize, OdeError> {
+        let started = self.profile.is_some().then(Instant::now);
+        filter.apply(&mut self.dv);
+        let outcome: CgOutcome = match self.solver {
+            LinearSolver::ConjugateGradient { tolerance, max_iterations } => pcg(
+                &self.a,
+                pattern,
+                filter,
+                &mut BlockJacobi,
+                &self.b,
+                &mut self.dv,
+                &mut self.cg,
+                tolerance,
+                max_iterations,
+            ),
+            #[cfg(feature = "sparse-cholesky")]
+            LinearSolver::SparseCholesky => {
+                let n = masses.len();
+                let fits = self.direct.0.as_ref().is_some_and(|d| d.fits(n, pattern));
+                if !fits {
+                    self.direct.0 = Some(
+                        super::cholesky::SparseSolver::new::<C>(n, pattern)
+                            .map_err(|e| OdeError::Factorization(e.to_string()))?,
+                    );
+                }
+                let direct = self.direct.0.as_mut().expect("built above");
+                direct
+                    .solve::<C>(&self.a.diag, &self.a.off, filter, &self.b, &mut self.dv)
+                    .map_err(|e| OdeError::Factorization(e.to_string()))?;
+                if let Some(p) = &mut self.profile {
+                    p.factorizations += 1;
+                }
+                CgOutcome { iterations: 0, relative_residual: 0.0, converged: true }
+            }
+            #[cfg(feature = "sparse-cholesky")]
+            LinearSolver::TwoLevel { tolerance, max_iterations } => {
+                let two_level = self.two_level.get_or_insert_with(Default::default);
+                let before = two_level.refactorizations;
+                two_level.update(&self.a, pattern, masses, prescribed).map_err(OdeError::Factorization)?;
+                let refreshed = two_level.refactorizations - before;
+                let setup_done = self.profile.is_some().then(Instant::now);
+                if let (Some(p), Some(s), Some(d)) = (&mut self.profile, started, setup_done) {
+                    p.setup_s += (d - s).as_secs_f64();
+                    p.factorizations += refreshed;
+                }
+                let outcome = pcg(
+                    &self.a,
+                    pattern,
+                    filter,
+                    two_level,
+                    &self.b,
+                    &mut self.dv,
+                    &mut self.cg,
+                    tolerance,
+                    max_iterations,
+                );
+                if let (Some(p), Some(d)) = (&mut self.profile, setup_done) {
+                    p.solve_s += d.elapsed().as_secs_f64();
+                    p.solver_iterations += outcome.iterations;
+                }
+                return finish(outcome, strict);
+            }
+        };
+        if let (Some(p), Some(s)) = (&mut self.profile, started) {
+            p.solve_s += s.elapsed().as_secs_f64();
+            p.solver_iterations += outcome.iterations;
+        }
+        finish(outcome, strict)
+    }
+}
+
+fn finish(outcome: CgOutcome, strict: bool) -> Result<usize, OdeError> {
+    if strict && !outcome.converged {
+        return Err(OdeError::SolverDidNotConverge {
+            iterations: outcome.iterations,
+            residual: outcome.relative_residual,
+        });
+    }
+    Ok(outcome.iterations)
+}
