@@ -89,6 +89,9 @@ fn integrator_help(i: Integrator) -> &'static str {
         Integrator::AdaptiveEuler => "forward Euler with the thesis's adaptive step rule",
         Integrator::ImplicitEuler => "backward Euler (Baraff–Witkin): stable at any step, damps motion",
         Integrator::Bdf2 => "second-order backward differentiation: stable, less damping than backward Euler",
+        Integrator::GeneralizedAlpha => {
+            "generalised-α: second order, damps only what a step cannot resolve; accurate at large steps"
+        }
     }
 }
 
@@ -99,6 +102,9 @@ enum SolverArg {
     Cg,
     /// faer's sparse Cholesky: exact whatever the stiffness.
     Cholesky,
+    /// Conjugate gradients with a factorised two-level preconditioner kept across steps (generalised-α's
+    /// default).
+    TwoLevel,
 }
 
 /// FLEX3D's friction reading (spec S7.2).
@@ -291,6 +297,7 @@ impl RunArgs {
             linear_solver: self.linear_solver.map(|s| match s {
                 SolverArg::Cg => LinearSolver::default_cg(),
                 SolverArg::Cholesky => LinearSolver::SparseCholesky,
+                SolverArg::TwoLevel => LinearSolver::default_two_level(),
             }),
             reference,
         })
