@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use crate::nunes::{self, WalkRules};
 use crate::repo::Repo;
-use anima_scene::optimisation::{LoadedOptimisation, OptimisationSpec};
+use anima_scene::optimisation::{LoadedOptimisation, OptimisationSpec, OptimiserSpec};
 
 use crate::optimise::Resumed;
 use crate::report::Document;
@@ -230,11 +230,17 @@ fn walk_variants(repo: &Repo) -> Result<String> {
     ];
     let walk = thesis_spec(repo, "walk")?;
     for (name, text, run_name, thesis_fit, thesis_long) in variants {
-        // The thesis's walking search on the variant's controller.
-        let loaded = LoadedOptimisation {
-            spec: OptimisationSpec { name: run_name.into(), ..walk.spec.clone() },
-            controller: nunes::controller(text)?,
-        };
+        // The thesis's walking search on the variant's controller, its stages over the variant's own
+        // free parameters (variant A frees two, its copies follow).
+        let controller = nunes::controller(text)?;
+        let n = controller.free_params(&walk.spec.parameters).len();
+        let mut spec = OptimisationSpec { name: run_name.into(), ..walk.spec.clone() };
+        if let OptimiserSpec::Greedy { stages } = &mut spec.optimiser {
+            for stage in stages {
+                stage.dims = (0..n).collect();
+            }
+        }
+        let loaded = LoadedOptimisation { spec, controller };
         let (spec, base) = (&loaded.spec, &loaded.controller);
         let ids = base.free_params(&spec.parameters);
         let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
