@@ -19,7 +19,14 @@ use crate::progress::Bar;
 
 /// Physically based animation: FLEX3D surfaces, Oliveira cloth, articulated characters.
 #[derive(Debug, Parser)]
-#[command(name = "anima", version, about)]
+#[command(
+    name = "anima",
+    version,
+    about,
+    after_help = "Exit status: 0 when the command did what was asked; 1 for bad input (a scene, spec or option \
+                  that cannot be used, an output that cannot be written: the message names the file, line and \
+                  column); 2 when a run diverged (it stopped at the first non-finite value and says where)."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -42,9 +49,12 @@ enum Command {
     Convert {
         /// The .PAR script.
         input: PathBuf,
-        /// Where to write the RON scene (default: the input with a .ron extension).
+        /// Where to write the RON scene (default: the input with a .ron extension). Never the input.
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Overwrite the output file when it exists.
+        #[arg(long)]
+        force: bool,
         /// Gravity to record in the scene: on (0, −9.8, 0), off, or gx,gy,gz.
         #[arg(long, value_parser = parse_gravity)]
         gravity: Option<DVec3>,
@@ -316,12 +326,16 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     if opts.reference.is_some() && !matches!(scene, Scene::Sheet(_)) {
         anyhow::bail!("--reference applies to sheet scenes only");
     }
+    let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
+    // Both outputs are checked before the run spends its time.
+    anima_lab::output::check_writable(
+        summary_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")),
+    )?;
     if !args.quiet {
         eprintln!("anima: {label} — {}", describe(&scene));
     }
     let mut bar = Bar::new(!args.quiet);
     let summary = anima_lab::run::run(&scene, &label, &opts, &mut bar)?;
-    let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     write_summary(&summary_path, &summary)?;
     if !args.quiet {
         report(&summary);
@@ -463,29 +477,61 @@ fn optimise_command(args: OptimiseArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn convert_command(input: &Path, output: Option<PathBuf>, gravity: Option<DVec3>) -> Result<()> {
+fn convert_command(input: &Path, output: Option<PathBuf>, force: bool, gravity: Option<DVec3>) -> Result<()> {
+    let out = output.unwrap_or_else(|| input.with_extension("ron"));
+    let same = |a: &Path, b: &Path| {
+        a == b
+            || std::fs::canonicalize(a).ok().zip(std::fs::canonicalize(b).ok()).is_some_and(|(a, b)| a == b)
+    };
+    if same(input, &out) {
+        anyhow::bail!("{}: the output would overwrite the input; name another with -o", out.display());
+    }
+    if out.exists() && !force {
+        anyhow::bail!("{} exists; pass --force to overwrite it", out.display());
+    }
     let bytes = std::fs::read(input).with_context(|| format!("reading {}", input.display()))?;
     let name = input.display().to_string();
     let ron = anima_scene::convert_par_to_ron(&bytes, &name, gravity.unwrap_or(FLEX3D_GRAVITY))?;
-    let out = output.unwrap_or_else(|| input.with_extension("ron"));
     anima_lab::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;
     eprintln!("anima: wrote {}", out.display());
     Ok(())
 }
 
+/// An error and its causes on one line, each cause said once (a cause that the error's own text already
+/// quotes is not repeated).
+fn chain(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&c);
+        }
+    }
+    text
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // An interrupt leaves no half-written temporary file behind; every finished file is whole already.
+    let _ = ctrlc::set_handler(|| {
+        anima_lab::output::remove_temporaries();
+        eprintln!("\nanima: interrupted");
+        std::process::exit(130);
+    });
     let result = match cli.command {
         Command::Run(args) => run_command(args),
         Command::Optimise(args) => optimise_command(args),
-        Command::Convert { input, output, gravity } => {
-            convert_command(&input, output, gravity).map(|()| ExitCode::SUCCESS)
+        Command::Convert { input, output, force, gravity } => {
+            convert_command(&input, output, force, gravity).map(|()| ExitCode::SUCCESS)
         }
     };
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("anima: error: {e:#}");
+            eprintln!("anima: error: {}", chain(&e));
             ExitCode::FAILURE
         }
     }

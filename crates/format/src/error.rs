@@ -138,8 +138,9 @@ impl FieldError {
 }
 
 /// The text of a file that must be UTF-8 (RON is UTF-8 by definition, so unlike `.PAR` there is no
-/// Latin-1 fallback); the error points at the first bad byte.
+/// Latin-1 fallback), without a leading byte-order mark; the error points at the first bad byte.
 pub fn utf8(bytes: &[u8]) -> Result<&str, ParseError> {
+    let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
     std::str::from_utf8(bytes).map_err(|e| {
         let good = std::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default();
         let line = 1 + good.matches('\n').count();
@@ -165,6 +166,7 @@ mod tests {
         let e = utf8(b"(\n  a: \xFF)").unwrap_err();
         assert_eq!((e.line, e.column, e.found.as_str()), (2, 6, "byte 0xFF"));
         assert_eq!(utf8("ÇÃ".as_bytes()).unwrap(), "ÇÃ");
+        assert_eq!(utf8("\u{feff}(a: 1)".as_bytes()).unwrap(), "(a: 1)", "a byte-order mark is dropped");
     }
 
     #[test]
@@ -179,5 +181,38 @@ mod tests {
         // A field that is not written is placed at the item that lacks it.
         let e = FieldError::invalid("bodies[0].side", "missing").locate(text);
         assert_eq!((e.line, e.column), (Some(3), Some(9)));
+    }
+}
+
+/// Why `name` cannot be part of a file name, or `None` when it can: a name from a scene file (a FLEX3D
+/// surface's, say) becomes a file name only when it is a plain one — letters, digits, `_`, `-` and `.`,
+/// not starting with `.`, at most 64 characters — so that it can never name a path outside the output
+/// folder or a hidden file.
+pub fn not_a_plain_name(name: &str) -> Option<&'static str> {
+    if name.is_empty() {
+        Some("a name that is not empty")
+    } else if name.chars().count() > 64 {
+        Some("a name of at most 64 characters")
+    } else if name.starts_with('.') {
+        Some("a name that does not start with `.`")
+    } else if !name.chars().all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.')) {
+        Some("a name of letters, digits, `_`, `-` and `.` (it names output files)")
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::not_a_plain_name;
+
+    #[test]
+    fn only_plain_names_become_file_names() {
+        for ok in ["toalha", "CORTINA_2", "pano-1.a", "CORTIÇA"] {
+            assert_eq!(not_a_plain_name(ok), None, "{ok}");
+        }
+        for bad in ["", "../../x", "/etc/passwd", "a/b", "a\\b", ".hidden", "..", "a b", &"x".repeat(65)] {
+            assert!(not_a_plain_name(bad).is_some(), "{bad:?}");
+        }
     }
 }

@@ -31,4 +31,4 @@ mod error;
 pub mod ron_path;
 pub mod ron_text;
 
-pub use error::{END_OF_FILE, FieldError, FieldErrorKind, ParseError, utf8};
+pub use error::{END_OF_FILE, FieldError, FieldErrorKind, ParseError, not_a_plain_name, utf8};

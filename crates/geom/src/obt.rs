@@ -179,6 +179,13 @@ pub fn read_obt(mut r: impl Read, base: IndexBase) -> Result<ObtObject, ObtError
 /// Writes one object as spec S2.6.3 describes: accented keywords in UTF-8, reals as `{:.6}`, 0-based
 /// vertex indices, colour entries as `#<n>`.
 pub fn write_obt(mut w: impl Write, obj: &ObtObject) -> io::Result<()> {
+    // The format has no way to say "not a number": a frame that is not finite is not written.
+    if !(obj.centre.is_finite() && obj.radius.is_finite() && obj.vertices.iter().all(|v| v.is_finite())) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("object `{}` has non-finite coordinates", obj.name),
+        ));
+    }
     let name: String = obj.name.chars().map(|c| if c.is_whitespace() { '_' } else { c }).collect();
     let name = if name.is_empty() { "objeto" } else { &name };
     let c = obj.centre;
@@ -371,7 +378,8 @@ impl<'a> Reader<'a> {
 
         self.keyword(Keyword::Faces)?;
         let (n_faces, _) = self.count("the number of faces")?;
-        let mut raw_faces: Vec<(Vec<(usize, Token<'a>)>, usize)> = Vec::with_capacity(n_faces);
+        // The count is the file's promise; the faces themselves decide how much is stored.
+        let mut raw_faces: Vec<(Vec<(usize, Token<'a>)>, usize)> = Vec::with_capacity(n_faces.min(1024));
         for face in 1..=n_faces {
             let (nv, nv_tok) = self.count(&format!("the vertex count of face {face} of {n_faces}"))?;
             if nv < 3 {

@@ -1,11 +1,56 @@
 //! Whole-file output: every file is written under a temporary name in the same folder and renamed into
-//! place, so a reader never sees half a file and an interrupted run never clobbers a good one.
+//! place, so a reader never sees half a file and an interrupted run never clobbers a good one. The
+//! temporary files being written are known ([`remove_temporaries`]), so an interrupt can take them away.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use anyhow::{Context, Result};
+
+/// The temporary files being written now.
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file being written (for an interrupt handler: the program then ends).
+pub fn remove_temporaries() {
+    let tmps = TEMPORARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    for tmp in tmps.iter() {
+        let _ = fs::remove_file(tmp);
+    }
+}
+
+/// Creates `dir` if it is not there and checks that a file can be written in it, before a run spends
+/// its time: a run that cannot save its results fails at once.
+pub fn check_writable(dir: &Path) -> Result<()> {
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let probe = dir.join(format!(".anima-probe{}", std::process::id()));
+    File::create(&probe).with_context(|| format!("{} is not writable", dir.display()))?;
+    fs::remove_file(&probe).with_context(|| format!("removing {}", probe.display()))
+}
+
+/// Removes the files of `dir` that `ours` recognises by name (the frames an earlier run of the same
+/// scene left there, which a shorter run would leave beside its own); returns how many.
+pub fn remove_stale(dir: &Path, ours: impl Fn(&str) -> bool) -> Result<usize> {
+    let Ok(entries) = fs::read_dir(dir) else { return Ok(0) };
+    let mut removed = 0;
+    for entry in entries {
+        let entry = entry.with_context(|| format!("listing {}", dir.display()))?;
+        let name = entry.file_name();
+        if name.to_str().is_some_and(&ours) && entry.path().is_file() {
+            fs::remove_file(entry.path()).with_context(|| format!("removing {}", entry.path().display()))?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
+/// Whether `name` is `<prefix><digits><suffix>`: a frame file of a run.
+pub fn is_frame_file(name: &str, prefix: &str, suffix: &str) -> bool {
+    name.strip_prefix(prefix)
+        .and_then(|r| r.strip_suffix(suffix))
+        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+}
 
 /// Writes `path` through `fill`, atomically (temporary file, then rename).
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
@@ -13,6 +58,15 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?;
     let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
+    let track = |add: bool| {
+        let mut tmps = TEMPORARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if add {
+            tmps.push(tmp.clone());
+        } else if let Some(k) = tmps.iter().position(|t| *t == tmp) {
+            tmps.swap_remove(k);
+        }
+    };
+    track(true);
     let result = (|| {
         let file = File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
         let mut w = BufWriter::new(file);
@@ -27,12 +81,21 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
+    track(false);
     result
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frame_files_are_told_by_name() {
+        assert!(is_frame_file("toalha_12.OBT", "toalha_", ".OBT"));
+        assert!(!is_frame_file("toalha_.OBT", "toalha_", ".OBT"));
+        assert!(!is_frame_file("toalha_1x.OBT", "toalha_", ".OBT"));
+        assert!(!is_frame_file("summary.json", "toalha_", ".OBT"));
+    }
 
     #[test]
     fn failed_write_keeps_the_old_file() {

@@ -7,6 +7,7 @@
 //! without a name are read as FLEX3D scenes when their fields say so (the form older versions wrote).
 
 use anima_cloth::flex3d::Flex3dScene;
+use anima_format::FieldError;
 use anima_geom::{DVec3, TriangleMesh};
 
 use crate::{ParseError, par};
@@ -49,4 +50,107 @@ pub fn to_ron_string(scene: &Flex3dScene) -> String {
 pub fn convert_par_to_ron(src_bytes: &[u8], file_name: &str, gravity: DVec3) -> Result<String, ParseError> {
     let script = par::parse(src_bytes).map_err(|e| e.with_file(file_name))?;
     Ok(to_ron_string(&script.to_scene(gravity)))
+}
+
+/// What a FLEX3D run needs that the RON format cannot say, checked with the field at fault: positive
+/// and finite times, sizes and masses, non-negative finite stiffnesses and friction, plain surface names
+/// that no two surfaces share (they name the frame files), pins inside their grid, and a scene of at
+/// most [`crate::limits::MAX_PARTICLES`] particles and [`crate::limits::MAX_STEPS`] steps. A `.PAR`
+/// script is checked the same way by its parser, at the token.
+pub fn check(scene: &Flex3dScene) -> Result<(), FieldError> {
+    let bad = |field: String, why: String| Err(FieldError::invalid(field, why));
+    let positive = |field: &str, v: f64| {
+        if v > 0.0 && v.is_finite() {
+            Ok(())
+        } else {
+            bad(field.into(), format!("expected a positive number, found {v}"))
+        }
+    };
+    let non_negative = |field: String, v: f64| {
+        if v >= 0.0 && v.is_finite() {
+            Ok(())
+        } else {
+            bad(field, format!("expected a finite number ≥ 0, found {v}"))
+        }
+    };
+    let finite = |field: &str, v: DVec3| {
+        if v.is_finite() { Ok(()) } else { bad(field.into(), format!("expected finite numbers, found {v}")) }
+    };
+    positive("duration_s", scene.duration_s)?;
+    positive("frame_rate_hz", scene.frame_rate_hz)?;
+    positive("dt_s", scene.dt_s)?;
+    if let Some(why) =
+        crate::limits::run_length_problem(scene.duration_s, scene.dt_s, Some(scene.frame_rate_hz))
+    {
+        return bad("dt_s".into(), format!("expected {why}"));
+    }
+    finite("gravity_m_s2", scene.gravity_m_s2)?;
+    finite("external_force_n", scene.external_force_n)?;
+    non_negative("friction.coefficient".into(), scene.friction.coefficient)?;
+    if scene.surfaces.is_empty() {
+        return bad("surfaces".into(), "expected at least one surface".into());
+    }
+    let mut particles = 0usize;
+    for (k, s) in scene.surfaces.iter().enumerate() {
+        let field = |f: &str| format!("surfaces[{k}].{f}");
+        if let Some(why) = anima_format::not_a_plain_name(&s.name) {
+            return bad(field("name"), format!("expected {why}, found `{}`", s.name));
+        }
+        if let Some(first) = scene.surfaces[..k].iter().position(|o| o.name == s.name) {
+            return bad(
+                field("name"),
+                format!("expected a name no other surface has (surfaces[{first}] is `{}` too)", s.name),
+            );
+        }
+        if s.rows < 2 || s.cols < 2 {
+            return bad(
+                field("rows"),
+                format!("expected at least 2 rows and 2 columns, found {} × {}", s.rows, s.cols),
+            );
+        }
+        let max = crate::limits::MAX_PARTICLES;
+        particles =
+            match s.rows.checked_mul(s.cols).and_then(|n| n.checked_add(particles)).filter(|&n| n <= max) {
+                Some(n) => n,
+                None => {
+                    return bad(
+                        field("rows"),
+                        format!(
+                            "expected at most {max} particles in all, found {} × {} here",
+                            s.rows, s.cols
+                        ),
+                    );
+                }
+            };
+        positive(&field("spacing_m"), s.spacing_m)?;
+        positive(&field("particle_mass_kg"), s.particle_mass_kg)?;
+        finite(&field("centre_m"), s.centre_m)?;
+        if !(s.normal.is_finite() && s.normal != DVec3::ZERO) {
+            return bad(field("normal"), format!("expected a finite non-zero vector, found {}", s.normal));
+        }
+        for c in 0..3 {
+            non_negative(format!("surfaces[{k}].stiffness_n_m[{c}]"), s.stiffness_n_m[c])?;
+            non_negative(format!("surfaces[{k}].bending_n_m[{c}]"), s.bending_n_m[c])?;
+        }
+        if let Some(p) = s.fixed.iter().position(|&(i, j)| i >= s.rows || j >= s.cols) {
+            let (i, j) = s.fixed[p];
+            return bad(
+                format!("surfaces[{k}].fixed[{p}]"),
+                format!("expected a particle of the {} × {} grid, found ({i}, {j})", s.rows, s.cols),
+            );
+        }
+        for (p, t) in s.translations.iter().enumerate() {
+            if !(t.per_frame_m.is_finite()
+                && t.start_s.is_finite()
+                && t.end_s.is_finite()
+                && t.start_s <= t.end_s)
+            {
+                return bad(
+                    format!("surfaces[{k}].translations[{p}]"),
+                    "expected a finite motion over a window with start_s ≤ end_s".into(),
+                );
+            }
+        }
+    }
+    Ok(())
 }

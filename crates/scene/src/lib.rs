@@ -51,6 +51,7 @@ pub mod body;
 pub mod character;
 mod error;
 pub mod flex3d;
+pub mod limits;
 mod load;
 pub mod oliveira;
 pub mod optimisation;
@@ -62,5 +63,7 @@ pub use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dScene};
 pub use anima_format::{END_OF_FILE, ParseError};
 pub use error::SceneError;
 pub use flex3d::{LoadedFlex3d, convert_par_to_ron};
-pub use load::{LoadOptions, Scene, SceneKind, load, load_flex3d, load_oliveira, load_optimisation};
+pub use load::{
+    LoadOptions, Scene, SceneKind, figures_run_problem, load, load_flex3d, load_oliveira, load_optimisation,
+};
 pub use text::decode;

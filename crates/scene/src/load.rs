@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anima_body::{BodyScene, Skeleton, SkeletonSource};
 use anima_cloth::flex3d::FLEX3D_GRAVITY;
-use anima_cloth::oliveira::{OliveiraScene, ShapeDesc};
+use anima_cloth::oliveira::{BuildError, OliveiraScene, ShapeDesc};
 use anima_control::Controller;
 use anima_format::ron_text::struct_name;
 use anima_format::{FieldError, utf8};
@@ -122,9 +122,12 @@ const SCENE_NAMES: &str =
 /// controller), resolved relative to the scene file's folder. The kind is told by the extension
 /// (`.par`, any case) or by the struct a `.ron` file starts with; every file is read once.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
-    let bytes = fs::read(path).map_err(SceneError::read(path))?;
     let file = File { path, folder: folder_of(path) };
     let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+    if !matches!(extension.as_str(), "par" | "ron") {
+        return Err(file.kind("expected a scene file ending in .par or .ron"));
+    }
+    let bytes = read_limited(path)?;
     match extension.as_str() {
         "par" => {
             let script = par::parse(&bytes).map_err(|e| file.parse_error(e))?;
@@ -138,11 +141,26 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
             let text = utf8(&bytes).map_err(|e| file.parse_error(e))?;
             load_ron(&file, text, opts)
         }
-        _ => Err(SceneError::Kind {
-            path: path.to_owned(),
-            why: "expected a scene file ending in .par or .ron".to_owned(),
-        }),
+        _ => unreachable!("checked above"),
     }
+}
+
+/// The bytes of `path`, at most [`crate::limits::MAX_FILE_BYTES`] of them: a larger file (or an endless
+/// one, a device) is an error before it is read whole.
+fn read_limited(path: &Path) -> Result<Vec<u8>, SceneError> {
+    use std::io::Read as _;
+    let max = crate::limits::MAX_FILE_BYTES;
+    let mut bytes = Vec::new();
+    fs::File::open(path)
+        .and_then(|f| f.take(max + 1).read_to_end(&mut bytes))
+        .map_err(SceneError::read(path))?;
+    if bytes.len() as u64 > max {
+        return Err(SceneError::Kind {
+            path: path.to_owned(),
+            why: format!("expected a file of at most {} MiB", max >> 20),
+        });
+    }
+    Ok(bytes)
 }
 
 fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneError> {
@@ -150,19 +168,7 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
     match struct_name(text).or_else(|| kind_by_fields(text)) {
         Some("Flex3dScene") => {
             let mut scene = crate::flex3d::from_ron_str(text).map_err(parse)?;
-            for (field, v) in [
-                ("duration_s", scene.duration_s),
-                ("dt_s", scene.dt_s),
-                ("frame_rate_hz", scene.frame_rate_hz),
-            ] {
-                if !(v > 0.0 && v.is_finite()) {
-                    return Err(file.invalid_at(
-                        text,
-                        field,
-                        format!("expected a positive number, found {v}"),
-                    ));
-                }
-            }
+            crate::flex3d::check(&scene).map_err(|e| file.description(e.locate(text)))?;
             if let Some(g) = opts.gravity {
                 scene.gravity_m_s2 = g;
             }
@@ -175,19 +181,26 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
         }
         Some("OliveiraScene") => {
             let scene = crate::oliveira::from_ron_str(text).map_err(parse)?;
-            Ok(Scene::Oliveira(LoadedOliveira { meshes: file.obj_meshes(&scene)?, scene, remesher: None }))
+            let loaded = LoadedOliveira { meshes: file.obj_meshes(&scene)?, scene, remesher: None };
+            file.check_drape(text, "", &loaded)?;
+            Ok(Scene::Oliveira(loaded))
         }
         Some("AdaptiveOliveiraScene") => {
             let a = crate::oliveira::adaptive_from_ron_str(text).map_err(parse)?;
             a.remesher.method().map_err(|why| file.invalid_at(text, "remesher", why))?;
-            Ok(Scene::Oliveira(LoadedOliveira {
+            let loaded = LoadedOliveira {
                 meshes: file.obj_meshes(&a.drape)?,
                 scene: a.drape,
                 remesher: Some(a.remesher),
-            }))
+            };
+            file.check_drape(text, "drape.", &loaded)?;
+            Ok(Scene::Oliveira(loaded))
         }
         Some("BodyScene") => {
             let scene = BodyScene::from_ron_str(text).map_err(|e| file.description(e))?;
+            if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval) {
+                return Err(file.invalid_at(text, "duration", why));
+            }
             let skeletons =
                 scene.models.iter().map(|m| file.skeleton(&m.skeleton)).collect::<Result<Vec<_>, _>>()?;
             Ok(Scene::Body(LoadedBody { scene, skeletons }))
@@ -233,7 +246,7 @@ fn kind_by_fields(text: &str) -> Option<&'static str> {
 
 /// Loads an optimisation spec and the controller it names.
 pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> {
-    let bytes = fs::read(path).map_err(SceneError::read(path))?;
+    let bytes = read_limited(path)?;
     let file = File { path, folder: folder_of(path) };
     let text = utf8(&bytes).map_err(|e| file.parse_error(e))?;
     match struct_name(text) {
@@ -285,16 +298,16 @@ impl File<'_> {
 
     fn read(&self, what: &'static str, name: &str) -> Result<(PathBuf, Vec<u8>), SceneError> {
         let path = self.folder.join(name);
-        match fs::read(&path) {
-            Ok(bytes) => Ok((path, bytes)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(SceneError::PartNotFound {
+        if !path.is_file() {
+            return Err(SceneError::PartNotFound {
                 scene: self.path.to_owned(),
                 what,
                 name: name.to_owned(),
                 folder: self.folder.to_owned(),
-            }),
-            Err(source) => Err(SceneError::Read { path, source }),
+            });
         }
+        let bytes = read_limited(&path)?;
+        Ok((path, bytes))
     }
 
     /// FLEX3D's `.OBT` objects: the exact name first, then a case-insensitive match in the same folder
@@ -309,7 +322,7 @@ impl File<'_> {
                     name: name.clone(),
                     folder: self.folder.to_owned(),
                 })?;
-                let bytes = fs::read(&path).map_err(SceneError::read(&path))?;
+                let bytes = read_limited(&path)?;
                 let object = read_obt(&bytes[..], IndexBase::Auto)
                     .map_err(|source| SceneError::Obt { path: path.clone(), source })?;
                 let mesh = object.to_mesh().map_err(|source| SceneError::Mesh { path, source })?;
@@ -329,6 +342,47 @@ impl File<'_> {
             }
         }
         Ok(meshes)
+    }
+
+    /// A drape is checked by building it (the cloth crate checks every value and names the field); the
+    /// field is then placed at its line. `prefix` is where the drape sits in the file (`drape.` in an
+    /// adaptive scene).
+    fn check_drape(&self, text: &str, prefix: &str, loaded: &LoadedOliveira) -> Result<(), SceneError> {
+        let scene = &loaded.scene;
+        if !(scene.duration_s > 0.0 && scene.duration_s.is_finite()) {
+            let why = format!("expected a positive number of seconds, found {}", scene.duration_s);
+            return Err(self.invalid_at(text, &format!("{prefix}duration_s"), why));
+        }
+        let n = scene.cloth.vertices_per_side;
+        let max_side = crate::limits::MAX_PARTICLES.isqrt();
+        if n > max_side {
+            let why = format!("expected at most {max_side} vertices a side, found {n}");
+            return Err(self.invalid_at(text, &format!("{prefix}cloth.vertices_per_side"), why));
+        }
+        let Err(e) = loaded.build() else { return Ok(()) };
+        let sites = anima_format::ron_path::field_sites(text);
+        let field = match &e {
+            // The material names its bad field in the message: `field `young_modulus_pa` is out of range`.
+            BuildError::Field { field: "material", message } if message.contains("field `") => {
+                let name = message.split('`').nth(1).unwrap_or_default();
+                format!("{prefix}material.{name}")
+            }
+            BuildError::Field { field, .. } => sites
+                .iter()
+                .map(|s| s.path.as_str())
+                .find(|p| {
+                    p.starts_with(prefix)
+                        && (*p == format!("{prefix}{field}") || p.ends_with(&format!(".{field}")))
+                })
+                .map_or(format!("{prefix}{field}"), str::to_owned),
+            BuildError::Object { name, .. } => scene
+                .objects
+                .iter()
+                .position(|o| &o.name == name)
+                .map_or(format!("{prefix}objects"), |k| format!("{prefix}objects[{k}]")),
+            _ => format!("{prefix}cloth"),
+        };
+        Err(self.description(FieldError::invalid(field, e.to_string()).locate(text)))
     }
 
     fn skeleton(&self, source: &SkeletonSource) -> Result<Skeleton, SceneError> {
@@ -356,6 +410,9 @@ impl File<'_> {
         check_positive(self, text, "duration", scene.duration)?;
         check_positive(self, text, "frame_interval", scene.frame_interval)?;
         check_positive(self, text, "world.dt", scene.world.dt)?;
+        if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval) {
+            return Err(self.invalid_at(text, "duration", why));
+        }
         if scene.models.is_empty() {
             return Err(self.invalid_at(text, "models", "expected at least one model".into()));
         }
@@ -390,6 +447,13 @@ impl File<'_> {
         }
         Ok(LoadedCharacter { scene, skeletons, controller })
     }
+}
+
+/// Why a run of figures of `duration` s at control steps of `dt` s, a picture every `frame_interval` s,
+/// cannot be run ([`crate::limits`]), or `None`.
+pub fn figures_run_problem(duration: f64, dt: f64, frame_interval: f64) -> Option<String> {
+    crate::limits::run_length_problem(duration, dt, Some(1.0 / frame_interval.max(dt)))
+        .map(|why| format!("expected {why}"))
 }
 
 fn check_positive(file: &File, text: &str, field: &str, v: f64) -> Result<(), SceneError> {

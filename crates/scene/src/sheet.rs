@@ -36,21 +36,57 @@ impl SheetScene {
 }
 
 impl SheetScene {
-    /// What a run needs that the format cannot say: positive, finite times and a sheet that is one.
-    /// The error names the field (placed at its line by the loader).
+    /// What a run needs that the format cannot say: positive, finite times and a run of at most
+    /// [`crate::limits::MAX_STEPS`] steps; a sheet of 2 to √[`crate::limits::MAX_PARTICLES`] particles a
+    /// side with a positive size and mass, finite non-negative stiffnesses and damping, pins inside the
+    /// grid. The error names the field (placed at its line by the loader).
     pub fn check(&self) -> Result<(), anima_format::FieldError> {
-        let bad = |field: &str, expected: &str, v: f64| {
-            Err(anima_format::FieldError::invalid(field, format!("expected {expected}, found {v}")))
-        };
+        let bad = |field: String, why: String| Err(anima_format::FieldError::invalid(field, why));
         for (field, v) in
             [("duration_s", self.duration_s), ("dt_s", self.dt_s), ("frame_rate_hz", self.frame_rate_hz)]
         {
             if !(v > 0.0 && v.is_finite()) {
-                return bad(field, "a positive number", v);
+                return bad(field.into(), format!("expected a positive number, found {v}"));
             }
         }
-        if self.sheet.n < 2 {
-            return bad("sheet.n", "at least 2 particles per side", self.sheet.n as f64);
+        if let Some(why) =
+            crate::limits::run_length_problem(self.duration_s, self.dt_s, Some(self.frame_rate_hz))
+        {
+            return bad("dt_s".into(), format!("expected {why}"));
+        }
+        let sheet = &self.sheet;
+        let max_side = crate::limits::MAX_PARTICLES.isqrt();
+        if !(2..=max_side).contains(&sheet.n) {
+            return bad(
+                "sheet.n".into(),
+                format!("expected 2 to {max_side} particles a side, found {}", sheet.n),
+            );
+        }
+        for (field, v) in [("sheet.size_m", sheet.size), ("sheet.total_mass_kg", sheet.total_mass)] {
+            if !(v > 0.0 && v.is_finite()) {
+                return bad(field.into(), format!("expected a positive number, found {v}"));
+            }
+        }
+        let non_negative = [("sheet.damping_n_s_m".to_owned(), sheet.damping)]
+            .into_iter()
+            .chain((0..3).map(|c| (format!("sheet.stiffness_n_m[{c}]"), sheet.stiffness[c])));
+        for (field, v) in non_negative {
+            if !(v >= 0.0 && v.is_finite()) {
+                return bad(field, format!("expected a finite number ≥ 0, found {v}"));
+            }
+        }
+        if !(sheet.height.is_finite() && sheet.gravity.is_finite()) {
+            return bad("sheet.height_m".into(), "expected a finite height and gravity".into());
+        }
+        if let Some(p) = sheet.pinned.iter().position(|&(i, j)| i >= sheet.n || j >= sheet.n) {
+            let (i, j) = sheet.pinned[p];
+            return bad(
+                format!("sheet.pinned[{p}]"),
+                format!(
+                    "expected a particle (i, j) of the {n} × {n} sheet, 0 ≤ i, j < {n}, found ({i}, {j})",
+                    n = sheet.n
+                ),
+            );
         }
         Ok(())
     }

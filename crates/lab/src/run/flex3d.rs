@@ -73,6 +73,12 @@ pub fn run(
     progress: &mut dyn Progress,
 ) -> Result<(Summary, Flex3dWorld)> {
     let scene = &loaded.scene;
+    // Surface names become file names: only plain ones (a scene built in code is not checked by a reader).
+    if let Some((s, why)) =
+        scene.surfaces.iter().find_map(|s| anima_format::not_a_plain_name(&s.name).map(|w| (s, w)))
+    {
+        anyhow::bail!("surface `{}`: expected {why}", s.name);
+    }
     let mut world = Flex3dWorld::new(scene, loaded.meshes()).context("building the scene")?;
     if let Some(solver) = opts.linear_solver {
         world.stepper_mut().set_linear_solver(solver);

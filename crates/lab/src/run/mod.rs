@@ -119,8 +119,30 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     })
 }
 
-/// Runs a loaded scene of any kind; `label` names it in the summary.
+/// Runs a loaded scene of any kind; `label` names it in the summary. The output folder is checked
+/// writable first, and the frames an earlier run of the same kind left there are removed (with a
+/// warning), so the folder holds this run's frames only.
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
+    if let Some(dir) = &opts.out_dir {
+        crate::output::check_writable(dir)?;
+        let surfaces: Vec<String> = match scene {
+            Scene::Flex3d(l) => l.scene.surfaces.iter().map(|s| format!("{}_", s.name)).collect(),
+            _ => Vec::new(),
+        };
+        let ours = |name: &str| {
+            use crate::output::is_frame_file as frame;
+            match scene {
+                Scene::Flex3d(_) => surfaces.iter().any(|p| frame(name, p, ".OBT") || frame(name, p, ".obj")),
+                Scene::Sheet(_) => frame(name, "sheet_", ".obj"),
+                Scene::Oliveira(_) => frame(name, "cloth_", ".obj"),
+                Scene::Body(_) | Scene::Character(_) => frame(name, "frame_", ".png"),
+            }
+        };
+        let removed = crate::output::remove_stale(dir, ours)?;
+        if removed > 0 {
+            progress.warn(&format!("removed {removed} frame files of an earlier run from {}", dir.display()));
+        }
+    }
     match scene {
         Scene::Flex3d(s) => Ok(flex3d::run(s, label, opts, progress)?.0),
         Scene::Sheet(s) => sheet::run(s, label, opts, progress),
@@ -274,7 +296,27 @@ impl Overrides {
                 }
             }
         }
-        Ok(())
+        self.check_after(scene)
+    }
+
+    /// The run the changed scene asks for must still be one anima can run (`anima_scene::limits`): the
+    /// loader checked the file's numbers, this checks the command line's.
+    fn check_after(&self, scene: &Scene) -> Result<()> {
+        let problem = match scene {
+            Scene::Flex3d(l) => anima_scene::flex3d::check(&l.scene).err().map(|e| e.to_string()),
+            Scene::Sheet(s) => s.check().err().map(|e| e.to_string()),
+            Scene::Oliveira(_) => None,
+            Scene::Body(l) => {
+                anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval)
+            }
+            Scene::Character(l) => {
+                anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval)
+            }
+        };
+        match problem {
+            Some(why) => anyhow::bail!("with --dt and --duration as given: {why}"),
+            None => Ok(()),
+        }
     }
 }
 

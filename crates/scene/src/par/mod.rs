@@ -101,8 +101,25 @@ impl Curvature {
     }
 }
 
-/// Parses a script from its bytes, UTF-8 or Latin-1.
+/// Parses a script from its bytes, UTF-8 or Latin-1. A UTF-8 file cut inside its last character is an
+/// error at that character, not a Latin-1 file.
 pub fn parse(src: &[u8]) -> Result<ParScript, ParseError> {
+    if let Err(e) = std::str::from_utf8(src)
+        && e.error_len().is_none()
+        && src.iter().any(|&b| b >= 0x80)
+        && std::str::from_utf8(&src[..e.valid_up_to()]).is_ok()
+        && src[e.valid_up_to()] >= 0xC0
+    {
+        let good = std::str::from_utf8(&src[..e.valid_up_to()]).unwrap_or_default();
+        let line = 1 + good.matches('\n').count();
+        let column = 1 + good.rsplit('\n').next().unwrap_or_default().chars().count();
+        return Err(ParseError::new(
+            line,
+            column,
+            "a complete UTF-8 character",
+            "a character cut by the end of the file",
+        ));
+    }
     parse_str(&crate::text::decode(src))
 }
 

@@ -12,8 +12,13 @@ use crate::ParseError;
 type Result<T> = std::result::Result<T, ParseError>;
 
 pub(super) fn script(tokens: &Tokens) -> Result<ParScript> {
-    Parser { tokens: &tokens.tokens, pos: 0, eof: (tokens.eof_line, tokens.eof_column) }.script()
+    Parser { tokens: &tokens.tokens, pos: 0, eof: (tokens.eof_line, tokens.eof_column), particles: 0 }
+        .script()
 }
+
+/// Room reserved for a declared count before the items are read: a count is a promise the text may
+/// not keep, so it never sizes an allocation by itself.
+const RESERVE: usize = 64;
 
 /// What a `RESTRIÇÕES … FIM_RESTRIÇÕES` block says.
 struct Restrictions {
@@ -25,6 +30,8 @@ struct Parser<'t> {
     tokens: &'t [Token],
     pos: usize,
     eof: (usize, usize),
+    /// Particles of the surfaces read so far, against [`crate::limits::MAX_PARTICLES`].
+    particles: usize,
 }
 
 /// A decimal real as the thesis writes them (`-0.39`, `10.0`, `0`, `25`). An exponent is accepted;
@@ -120,6 +127,13 @@ impl<'t> Parser<'t> {
         if x > 0.0 { Ok(x) } else { Err(self.error(Some(t), format!("a positive number for {kw}"))) }
     }
 
+    /// `KEYWORD =? num` with num ≥ 0 (a friction coefficient).
+    fn non_negative_setting(&mut self, kw: Keyword) -> Result<f64> {
+        self.setting(kw)?;
+        let (x, t) = self.number(&kw.to_string())?;
+        if x >= 0.0 { Ok(x) } else { Err(self.error(Some(t), format!("a number ≥ 0 for {kw}"))) }
+    }
+
     fn number_setting(&mut self, kw: Keyword) -> Result<f64> {
         self.setting(kw)?;
         Ok(self.number(&kw.to_string())?.0)
@@ -188,12 +202,16 @@ impl<'t> Parser<'t> {
         let duration_s = self.positive_setting(Keyword::Duracao)?;
         let frame_rate_hz = self.positive_setting(Keyword::QuadrosSeg)?;
         let dt_s = self.positive_setting(Keyword::DeltaT)?;
+        if let Some(why) = crate::limits::run_length_problem(duration_s, dt_s, Some(frame_rate_hz)) {
+            // Point at the step's value, the number that sets how many steps there are.
+            return Err(self.error(self.tokens.get(self.pos - 1), why));
+        }
         let external_force_n = self.vec3_setting(Keyword::ForcaExterna)?;
-        let friction = self.number_setting(Keyword::Atrito)?;
+        let friction = self.non_negative_setting(Keyword::Atrito)?;
 
         self.setting(Keyword::ObjetosNaCena)?;
         let n_objects = self.whole(0, format!("a whole number for {}", Keyword::ObjetosNaCena))?;
-        let mut objects = Vec::with_capacity(n_objects);
+        let mut objects = Vec::with_capacity(n_objects.min(RESERVE));
         for k in 1..=n_objects {
             if !self.at_name() {
                 return Err(self.error_here(format!(
@@ -228,7 +246,7 @@ impl<'t> Parser<'t> {
         }
         let n_surfaces = self.whole(1, format!("a whole number ≥ 1 for {}", Keyword::NumSuperficies))?;
 
-        let mut surfaces = Vec::with_capacity(n_surfaces);
+        let mut surfaces: Vec<ParSurface> = Vec::with_capacity(n_surfaces.min(RESERVE));
         for k in 1..=n_surfaces {
             let expected = format!(
                 "{} (surface {k} of {n_surfaces} declared by {})",
@@ -236,7 +254,22 @@ impl<'t> Parser<'t> {
                 Keyword::NumSuperficies
             );
             self.keyword_or(Keyword::Superficie, expected)?;
-            surfaces.push(self.surface()?);
+            let name_token = self.peek();
+            let surface = self.surface()?;
+            // A surface's name names its frame files: it must be plain, and no other surface's.
+            if let Some(name) = &surface.name {
+                let at = name_token.filter(|t| &t.text == name);
+                if let Some(why) = anima_format::not_a_plain_name(name) {
+                    return Err(self.error(at, why));
+                }
+                if let Some(first) = surfaces.iter().position(|s| s.name.as_ref() == Some(name)) {
+                    return Err(self.error(
+                        at,
+                        format!("a name no other surface has (surface {} is `{name}` too)", first + 1),
+                    ));
+                }
+            }
+            surfaces.push(surface);
         }
         if let Some(t) = self.peek() {
             let expected = if t.keyword() == Some(Keyword::Superficie) {
@@ -266,9 +299,20 @@ impl<'t> Parser<'t> {
         self.setting(Keyword::Malha)?;
         let opened = self.open();
         // A 1-wide mesh has no triangles and no diagonal springs (spec S2.1).
+        let rows_token = self.peek();
         let rows = self.whole(2, format!("a whole number of rows ≥ 2 for {}", Keyword::Malha))?;
         let cols = self.whole(2, format!("a whole number of columns ≥ 2 for {}", Keyword::Malha))?;
         self.close(opened, Keyword::Malha)?;
+        let max = crate::limits::MAX_PARTICLES;
+        match rows.checked_mul(cols).and_then(|n| n.checked_add(self.particles)).filter(|&n| n <= max) {
+            Some(n) => self.particles = n,
+            None => {
+                return Err(self.error(
+                    rows_token,
+                    format!("a mesh whose particles, with the other surfaces', number at most {max} ({rows} × {cols} here)"),
+                ));
+            }
+        }
 
         let spacing_m = self.positive_setting(Keyword::Densidade)?;
         let centre_m = self.vec3_setting(Keyword::PosicNoSru)?;
@@ -284,7 +328,15 @@ impl<'t> Parser<'t> {
         }
 
         let particle_mass_kg = self.positive_setting(Keyword::Massa)?;
-        let stiffness_n_m = self.vec3_setting(Keyword::ConstElasticidade)?.to_array();
+        self.setting(Keyword::ConstElasticidade)?;
+        let (k, first) = self.vec3(Keyword::ConstElasticidade)?;
+        if let Some(c) = (0..3).find(|&c| k[c] < 0.0) {
+            return Err(self.error(
+                self.tokens.get(first + c),
+                format!("a stiffness ≥ 0 for {}", Keyword::ConstElasticidade),
+            ));
+        }
+        let stiffness_n_m = k.to_array();
         let curvature = self.curvature()?;
         let Restrictions { fixed, translations } = self.restrictions(rows, cols)?;
         self.keyword(Keyword::FimSuperficie)?;
@@ -309,10 +361,14 @@ impl<'t> Parser<'t> {
         let kw = Keyword::ConstCurvatura;
         self.setting(kw)?;
         let opened = self.open();
-        let (k1, _) = self.number(&kw.to_string())?;
+        let non_negative = |p: &mut Self, what: String| -> Result<f64> {
+            let (k, t) = p.number(&what)?;
+            if k >= 0.0 { Ok(k) } else { Err(p.error(Some(t), format!("a constant ≥ 0 for {kw}"))) }
+        };
+        let k1 = non_negative(self, kw.to_string())?;
         let curvature = if self.at_number() {
-            let (k2, _) = self.number(&kw.to_string())?;
-            let (k3, _) = self.number(&format!("{kw} (it takes 1 value or 3)"))?;
+            let k2 = non_negative(self, kw.to_string())?;
+            let k3 = non_negative(self, format!("{kw} (it takes 1 value or 3)"))?;
             Curvature::PerPair([k1, k2, k3])
         } else {
             Curvature::One(k1)
@@ -325,8 +381,19 @@ impl<'t> Parser<'t> {
     fn restrictions(&mut self, rows: usize, cols: usize) -> Result<Restrictions> {
         self.keyword(Keyword::Restricoes)?;
         self.setting(Keyword::PontosFixos)?;
+        let n_token = self.peek();
         let n_fixed = self.whole(0, format!("a whole number for {}", Keyword::PontosFixos))?;
-        let mut fixed = Vec::with_capacity(n_fixed);
+        if n_fixed > rows * cols {
+            return Err(self.error(
+                n_token,
+                format!(
+                    "at most {} fixed points for {} (the mesh has {rows} × {cols} particles)",
+                    rows * cols,
+                    Keyword::PontosFixos
+                ),
+            ));
+        }
+        let mut fixed = Vec::with_capacity(n_fixed.min(RESERVE));
         for p in 1..=n_fixed {
             let i = self.index(rows, format!("a row index 0 ≤ i < {rows} (fixed point {p} of {n_fixed})"))?;
             let j =

@@ -1,0 +1,241 @@
+//! Hostile but fair input to `anima`: every case gets a located error and exit status 1, no panic,
+//! nothing written outside `--out`, nothing unbounded. One test per category of the hostile-input issue.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn anima() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_anima"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("anima-hostile-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn assets(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets").join(rel)
+}
+
+/// `assets/<rel>` with `from` replaced by `to`, written into `dir` as `name`.
+fn edited(dir: &Path, rel: &str, from: &str, to: &str, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(assets(rel)).unwrap();
+    assert!(text.contains(from), "{rel} has `{from}`");
+    let p = dir.join(name);
+    std::fs::write(&p, text.replace(from, to)).unwrap();
+    p
+}
+
+fn run(dir: &Path, scene: &Path, extra: &[&str]) -> Output {
+    anima()
+        .args(["run", "--quiet", "--no-pictures", "--out"])
+        .arg(dir.join("out"))
+        .args(extra)
+        .arg(scene)
+        .output()
+        .unwrap()
+}
+
+/// The run was refused with exit status 1 and an error that contains each of `wanted`.
+fn refused(o: &Output, wanted: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "exit status 1 for bad input: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for w in wanted {
+        assert!(err.contains(w), "the error says `{w}`: {err}");
+    }
+    err
+}
+
+/// Every file under `dir`, recursively.
+fn all_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries {
+            let p = e.unwrap().path();
+            if p.is_dir() { out.extend(all_files(&p)) } else { out.push(p) }
+        }
+    }
+    out
+}
+
+#[test]
+fn output_names_are_data_not_paths() {
+    let dir = temp_dir("names");
+    let escape =
+        edited(&dir, "flex3d/a2-2-vento.par", "SUPERFÍCIE\n", "SUPERFÍCIE ../../escaped\n", "escape.par");
+    refused(&run(&dir, &escape, &[]), &["escape.par:8:12:", "../../escaped", "does not start with `.`"]);
+    let ron =
+        edited(&dir, "flex3d/wind.ron", "name: \"SUPERFICIE1\"", "name: \"/tmp/escaped\"", "escape.ron");
+    refused(&run(&dir, &ron, &[]), &["escape.ron", "surfaces[0].name", "line"]);
+    // Two surfaces of one name would write over each other's frames.
+    let twice = edited(&dir, "flex3d/a2-4-cortinas.par", "SUPERFÍCIE cortd", "SUPERFÍCIE corte", "twice.par");
+    refused(
+        &run(&dir, &twice, &[]),
+        &["twice.par:", "a name no other surface has (surface 1 is `corte` too)"],
+    );
+    assert!(!dir.parent().unwrap().join("escaped").exists() && !Path::new("/tmp/escaped_1.OBT").exists());
+    assert!(all_files(&dir.join("out")).is_empty(), "nothing written for a refused scene");
+    // `convert` never writes over its input, and asks before writing over anything else.
+    let par = dir.join("vento.par");
+    std::fs::copy(assets("flex3d/a2-2-vento.par"), &par).unwrap();
+    let o = anima().args(["convert", "-o"]).arg(&par).arg(&par).output().unwrap();
+    refused(&o, &["would overwrite the input"]);
+    assert_eq!(std::fs::read(&par).unwrap(), std::fs::read(assets("flex3d/a2-2-vento.par")).unwrap());
+    let ron = dir.join("vento.ron");
+    std::fs::write(&ron, "keep me").unwrap();
+    refused(&anima().arg("convert").arg(&par).output().unwrap(), &["exists; pass --force"]);
+    assert_eq!(std::fs::read_to_string(&ron).unwrap(), "keep me");
+    assert!(anima().args(["convert", "--force"]).arg(&par).status().unwrap().success());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn declared_sizes_and_counts_are_bounded_before_anything_is_allocated() {
+    let dir = temp_dir("limits");
+    for (from, to, wanted) in [
+        ("MALHA (10 10)", "MALHA (100000 100000)", "number at most 4000000"),
+        ("MALHA (10 10)", "MALHA (4294967296 4294967296)", "number at most 4000000"),
+        ("PONTOS_FIXOS = 3", "PONTOS_FIXOS = 1000000000", "at most 100 fixed points"),
+        ("DELTA_t = 0.001", "DELTA_t = 1e-300", "a run of at most 1e9 steps"),
+        ("DURAÇÃO = 4", "DURAÇÃO = 1e308", "a run of at most 1e9 steps"),
+        ("QUADROS_SEG = 5", "QUADROS_SEG = 100000", "at most one frame per step"),
+    ] {
+        let p = edited(&dir, "flex3d/a2-2-vento.par", from, to, "big.par");
+        let err = refused(&run(&dir, &p, &[]), &["big.par:", wanted]);
+        // Located: file:line:column.
+        assert!(
+            err.split("big.par:").nth(1).is_some_and(|r| r.chars().next().unwrap().is_ascii_digit()),
+            "{err}"
+        );
+    }
+    // `NUM_SUPERFÍCIES = 1e11` is no whole number; a huge whole one only runs out of surfaces to read.
+    let p = edited(
+        &dir,
+        "flex3d/a2-2-vento.par",
+        "NUM_SUPERFÍCIES = 1",
+        "NUM_SUPERFÍCIES = 100000000000",
+        "many.par",
+    );
+    refused(&run(&dir, &p, &[]), &["many.par:", "end of file"]);
+    let sheet = assets("scenes/standard-sheet-32.ron");
+    refused(&run(&dir, &sheet, &["--duration", "1e308"]), &["at most 1e9 steps"]);
+    refused(&run(&dir, &sheet, &["--dt", "1e-300"]), &["at most 1e9 steps"]);
+    let p = edited(&dir, "scenes/standard-sheet-32.ron", "n: 32,", "n: 100000,", "huge.ron");
+    refused(&run(&dir, &p, &[]), &["huge.ron", "sheet.n", "expected 2 to 2000 particles a side"]);
+    let p = edited(&dir, "scenes/walk.ron", "duration: 50.0,", "duration: inf,", "forever.ron");
+    refused(&run(&dir, &p, &[]), &["forever.ron", "duration"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn every_value_is_checked_where_it_is_read() {
+    let dir = temp_dir("values");
+    for (rel, from, to, wanted) in [
+        ("scenes/standard-sheet-32.ron", "(31, 0)]", "(32, 0)]", "sheet.pinned[1]"),
+        ("scenes/standard-sheet-32.ron", "(1000.0, 500.0", "(NaN, 500.0", "sheet.stiffness_n_m[0]"),
+        ("scenes/standard-sheet-32.ron", "size_m: 1.0", "size_m: 0.0", "sheet.size_m"),
+        ("scenes/standard-sheet-32.ron", "total_mass_kg: 0.2", "total_mass_kg: 0.0", "sheet.total_mass_kg"),
+        (
+            "scenes/standard-sheet-32.ron",
+            "damping_n_s_m: 0.02",
+            "damping_n_s_m: -0.02",
+            "sheet.damping_n_s_m",
+        ),
+        ("scenes/standard-sheet-32.ron", "n: 32,", "n: 1,", "sheet.n"),
+        ("flex3d/wind.ron", "coefficient: 0.18", "coefficient: -0.18", "friction.coefficient"),
+        (
+            "oliveira/test-3-sphere-5x5.ron",
+            "young_modulus_pa: 1e7",
+            "young_modulus_pa: -1e7",
+            "material.young_modulus_pa",
+        ),
+    ] {
+        let name = format!("value-{}", Path::new(rel).file_name().unwrap().to_string_lossy());
+        let p = edited(&dir, rel, from, to, &name);
+        if rel.starts_with("oliveira") {
+            // Written beside the assets it names would be outside the scratch folder: name none.
+            assert!(!std::fs::read_to_string(&p).unwrap().contains("meshes/"));
+        }
+        refused(&run(&dir, &p, &[]), &[&name, wanted, "line"]);
+    }
+    let p = edited(&dir, "flex3d/a2-2-vento.par", "ATRITO = 0.18", "ATRITO = -0.18", "friction.par");
+    refused(&run(&dir, &p, &[]), &["friction.par:5:10:", "a number ≥ 0 for `ATRITO`"]);
+    let p = edited(&dir, "flex3d/a2-2-vento.par", "(10.0 10.0 10.0)", "(10.0 -10.0 10.0)", "stiffness.par");
+    refused(&run(&dir, &p, &[]), &["stiffness.par:14:", "a stiffness ≥ 0"]);
+    // Options that do not apply to the scene's kind are refused, not ignored.
+    let body = assets("scenes/stand.ron");
+    refused(&run(&dir, &body, &["--integrator", "rk4"]), &["does not apply to a body scene"]);
+    refused(&run(&dir, &body, &["--friction", "viscous"]), &["does not apply to a body scene"]);
+    refused(
+        &run(&dir, &assets("scenes/standard-sheet-32.ron"), &["--gravity", "off"]),
+        &["does not apply to a sheet"],
+    );
+    refused(&run(&dir, &body, &["--dt", "0.2", "--duration", "0.1"]), &["no longer than the run"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_run_keeps_its_outputs_whole_and_its_own() {
+    let dir = temp_dir("hygiene");
+    let out = dir.join("out");
+    let curtain = assets("flex3d/curtain.ron");
+    // An output that cannot be written fails before the run, not after it.
+    std::fs::write(dir.join("file"), "").unwrap();
+    let o = anima()
+        .args(["run", "--quiet", "--summary"])
+        .arg(dir.join("file/summary.json"))
+        .arg(&curtain)
+        .output()
+        .unwrap();
+    refused(&o, &["file"]);
+    // A reused --out holds only this run's frames.
+    let long = anima()
+        .args(["run", "--quiet", "--no-pictures", "--duration", "5", "--out"])
+        .arg(&out)
+        .arg(&curtain)
+        .output()
+        .unwrap();
+    assert!(long.status.success());
+    assert!(out.join("cortina_5.OBT").is_file());
+    let short = anima()
+        .args(["run", "--no-pictures", "--duration", "2", "--out"])
+        .arg(&out)
+        .arg(&curtain)
+        .output()
+        .unwrap();
+    assert!(short.status.success());
+    assert!(String::from_utf8_lossy(&short.stderr).contains("removed 10 frame files of an earlier run"));
+    assert!(out.join("cortina_2.OBT").is_file() && !out.join("cortina_5.OBT").exists());
+    assert!(
+        all_files(&out).iter().all(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.')),
+        "no temporary files"
+    );
+    // A byte-order mark is accepted in RON as in .PAR.
+    let text = std::fs::read_to_string(&curtain).unwrap();
+    std::fs::write(dir.join("bom.ron"), format!("\u{feff}{text}")).unwrap();
+    assert!(run(&dir, &dir.join("bom.ron"), &["--duration", "1"]).status.success());
+    // A .PAR cut inside a UTF-8 character is refused there, not read as Latin-1.
+    std::fs::write(
+        dir.join("cut.par"),
+        "DURAÇÃO = 4\nQUADROS_SEG = 5\nSUPERF\u{cd}".as_bytes().split_last().unwrap().1,
+    )
+    .unwrap();
+    refused(&run(&dir, &dir.join("cut.par"), &[]), &["cut.par:3:7:", "a complete UTF-8 character"]);
+    // Not a scene by its name: refused before a byte is read (`/dev/zero` would never end).
+    if Path::new("/dev/zero").exists() {
+        refused(&run(&dir, Path::new("/dev/zero"), &[]), &["ending in .par or .ron"]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn exit_statuses_are_documented() {
+    let help = String::from_utf8_lossy(&anima().arg("--help").output().unwrap().stdout).into_owned();
+    assert!(
+        help.contains("0 when") && help.contains("1 for bad input") && help.contains("2 when a run diverged"),
+        "{help}"
+    );
+}
