@@ -239,3 +239,29 @@ fn exit_statuses_are_documented() {
         "{help}"
     );
 }
+
+#[test]
+fn an_interrupted_run_leaves_no_temporary_file() {
+    if Command::new("kill").arg("-l").output().is_err() {
+        return; // no `kill` to send the signal with
+    }
+    let dir = temp_dir("interrupt");
+    let out = dir.join("out");
+    // The theatre curtains write 290 frame files over 145 simulated seconds: long enough to interrupt.
+    let mut child = anima()
+        .args(["run", "--quiet", "--no-pictures", "--out"])
+        .arg(&out)
+        .arg(assets("flex3d/a2-4-cortinas.par"))
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "an interrupt ends the run with status 130");
+    let files = all_files(&out);
+    assert!(!files.is_empty(), "frames were written before the interrupt");
+    let hidden: Vec<_> =
+        files.iter().filter(|p| p.file_name().unwrap().to_string_lossy().starts_with('.')).collect();
+    assert!(hidden.is_empty(), "temporary files left behind: {hidden:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
