@@ -267,9 +267,9 @@ impl NetworkSim {
 }
 
 /// The analytic colliders as the implicit solve sees them: a particle whose path enters a collider
-/// (grown by the margin) is in contact at its entry point, one that ends inside at the nearest point of
-/// the grown surface; Coulomb friction `friction`, no restitution (the split's response removes the
-/// approaching normal velocity too).
+/// (grown by the margin) is in contact at its entry point, one that ends inside, or within one more
+/// margin of it, at the nearest point of the grown surface; Coulomb friction `friction`, no restitution
+/// (the split's response removes the approaching normal velocity too).
 #[derive(Debug, Clone, Copy)]
 pub struct AnalyticContacts<'a> {
     pub colliders: &'a [Collider],
@@ -284,9 +284,13 @@ impl ContactModel<DVec3> for AnalyticContacts<'_> {
             // order entries (0, distance along the path) before push-outs (1, −depth).
             let mut best: Option<((u8, f64), DVec3, DVec3)> = None;
             for c in self.colliders {
+                // A particle within twice the margin is reported too, so that a resting contact is
+                // found at once and keeps its regime; its plane stays at the margin.
                 let found = match c.entry(from, to, self.margin) {
                     Some((q, n)) => Some(((0, q.distance(from)), q, n)),
-                    None => c.push_out(to, self.margin).map(|(q, n)| ((1, -q.distance(to)), q, n)),
+                    None => c
+                        .push_out(to, 2.0 * self.margin)
+                        .map(|(q, n)| ((1, -q.distance(to)), q - n * self.margin, n)),
                 };
                 if let Some(f) = found
                     && best.is_none_or(|b| f.0 < b.0)
