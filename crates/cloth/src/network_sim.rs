@@ -156,6 +156,8 @@ pub struct NetworkSim {
     pub margin: f64,
     /// Where contacts are answered: after the step (the default) or inside the implicit solve.
     pub contact: ContactMode,
+    /// Per particle, whether the last contact pass after the step moved it.
+    touched: Vec<bool>,
     step: usize,
     dt: f64,
     pub stats: StepStats,
@@ -174,6 +176,7 @@ impl NetworkSim {
             friction: 0.0,
             margin: 1e-3,
             contact: ContactMode::AfterStep,
+            touched: vec![false; n],
             step: 0,
             dt,
             stats: StepStats::default(),
@@ -217,7 +220,7 @@ impl NetworkSim {
         self.stats.late_contacts += s.late_contacts;
         std::mem::swap(&mut self.state, &mut self.scratch);
         if !in_solve && !self.colliders.is_empty() && self.resolve_contacts() {
-            self.stepper.reset_history();
+            self.stepper.reset_history_of(&self.touched);
         }
         self.step += 1;
         Ok(())
@@ -240,6 +243,7 @@ impl NetworkSim {
     /// contact was found.
     fn resolve_contacts(&mut self) -> bool {
         let mut any = false;
+        self.touched.fill(false);
         let pinned = self.network.pinned();
         for (p, _) in pinned.iter().enumerate().filter(|(_, pin)| !**pin) {
             let from = self.scratch.x[p];
@@ -249,6 +253,7 @@ impl NetworkSim {
                     .or_else(|| c.push_out(self.state.x[p], self.margin));
                 if let Some((q, n)) = contact {
                     any = true;
+                    self.touched[p] = true;
                     self.state.x[p] = q;
                     // The velocity becomes the motion the contact allowed over the step, so that a
                     // particle held at an edge does not keep a velocity into the obstacle; then the

@@ -340,8 +340,9 @@ impl OliveiraCloth {
         if hits > 0 {
             self.first_collision.get_or_insert(self.time + dt);
             self.total_hits += hits as u64;
-            // A multistep method's history no longer describes the state.
-            self.stepper.reset_history();
+            // A multistep method's history no longer describes the state; generalised-α forgets the
+            // acceleration of the particles answered only.
+            self.stepper.reset_history_of(&self.responded);
         }
         self.finish_step(dt, hits)
     }
