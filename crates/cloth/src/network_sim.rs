@@ -156,6 +156,8 @@ pub struct NetworkSim {
     pub margin: f64,
     /// Where contacts are answered: after the step (the default) or inside the implicit solve.
     pub contact: ContactMode,
+    /// Per particle, whether the last contact pass after the step moved it.
+    touched: Vec<bool>,
     step: usize,
     dt: f64,
     pub stats: StepStats,
@@ -174,6 +176,7 @@ impl NetworkSim {
             friction: 0.0,
             margin: 1e-3,
             contact: ContactMode::AfterStep,
+            touched: vec![false; n],
             step: 0,
             dt,
             stats: StepStats::default(),
@@ -217,7 +220,7 @@ impl NetworkSim {
         self.stats.late_contacts += s.late_contacts;
         std::mem::swap(&mut self.state, &mut self.scratch);
         if !in_solve && !self.colliders.is_empty() && self.resolve_contacts() {
-            self.stepper.reset_history();
+            self.stepper.reset_history_of(&self.touched);
         }
         self.step += 1;
         Ok(())
@@ -240,6 +243,7 @@ impl NetworkSim {
     /// contact was found.
     fn resolve_contacts(&mut self) -> bool {
         let mut any = false;
+        self.touched.fill(false);
         let pinned = self.network.pinned();
         for (p, _) in pinned.iter().enumerate().filter(|(_, pin)| !**pin) {
             let from = self.scratch.x[p];
@@ -249,6 +253,7 @@ impl NetworkSim {
                     .or_else(|| c.push_out(self.state.x[p], self.margin));
                 if let Some((q, n)) = contact {
                     any = true;
+                    self.touched[p] = true;
                     self.state.x[p] = q;
                     // The velocity becomes the motion the contact allowed over the step, so that a
                     // particle held at an edge does not keep a velocity into the obstacle; then the
@@ -267,9 +272,9 @@ impl NetworkSim {
 }
 
 /// The analytic colliders as the implicit solve sees them: a particle whose path enters a collider
-/// (grown by the margin) is in contact at its entry point, one that ends inside at the nearest point of
-/// the grown surface; Coulomb friction `friction`, no restitution (the split's response removes the
-/// approaching normal velocity too).
+/// (grown by the margin) is in contact at its entry point, one that ends inside, or within one more
+/// margin of it, at the nearest point of the grown surface; Coulomb friction `friction`, no restitution
+/// (the split's response removes the approaching normal velocity too).
 #[derive(Debug, Clone, Copy)]
 pub struct AnalyticContacts<'a> {
     pub colliders: &'a [Collider],
@@ -284,9 +289,13 @@ impl ContactModel<DVec3> for AnalyticContacts<'_> {
             // order entries (0, distance along the path) before push-outs (1, −depth).
             let mut best: Option<((u8, f64), DVec3, DVec3)> = None;
             for c in self.colliders {
+                // A particle within twice the margin is reported too, so that a resting contact is
+                // found at once and keeps its regime; its plane stays at the margin.
                 let found = match c.entry(from, to, self.margin) {
                     Some((q, n)) => Some(((0, q.distance(from)), q, n)),
-                    None => c.push_out(to, self.margin).map(|(q, n)| ((1, -q.distance(to)), q, n)),
+                    None => c
+                        .push_out(to, 2.0 * self.margin)
+                        .map(|(q, n)| ((1, -q.distance(to)), q - n * self.margin, n)),
                 };
                 if let Some(f) = found
                     && best.is_none_or(|b| f.0 < b.0)

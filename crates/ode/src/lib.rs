@@ -9,9 +9,15 @@
 //! - [`Stepper`] owns an [`Integrator`] and every scratch buffer it needs (so the step loop never
 //!   allocates): explicit and symplectic Euler, midpoint (RK2), classical RK4, Dormand–Prince 5(4),
 //!   Adams–Bashforth 4 and the Adams–Bashforth–Moulton 4 predictor–corrector (both started by RK4), the
-//!   thesis's adaptive Euler, and implicit (backward) Euler solved the Baraff–Witkin way (one Newton step,
-//!   exact Jacobians from a [`Linearized`] system, preconditioned conjugate gradients or faer's sparse
-//!   Cholesky with its symbolic factorisation reused).
+//!   thesis's adaptive Euler, implicit (backward) Euler solved the Baraff–Witkin way (one Newton step,
+//!   exact Jacobians from a [`Linearized`] system) and BDF2, and generalised-α (Chung & Hulbert 1993:
+//!   second order, its damping of unresolved modes set by ρ∞, Newton's method with a safeguarding line
+//!   search). Their linear systems are solved by preconditioned conjugate gradients (block Jacobi, or a
+//!   two-level preconditioner that keeps one factorisation of a scalar mass-plus-spring matrix across
+//!   steps) or by faer's sparse Cholesky with its symbolic factorisation reused ([`LinearSolver`]).
+//! - [`contact`]: contacts with static surfaces constrained inside generalised-α's solve (normal
+//!   velocity, Coulomb friction sticking or sliding, release when pulling), through a [`contact::ContactModel`]
+//!   the caller implements with its geometry ([`Stepper::step_with_contacts`]).
 //! - [`integrate`] drives a stepper with a [`StepControl`] (constant step, an embedded-error controller,
 //!   or the thesis's Euler rule) and stops with the step and coordinate where a value went non-finite.
 //! - [`stability`] estimates the largest frequency of a system and the largest stable step of each

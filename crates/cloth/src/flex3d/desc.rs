@@ -5,6 +5,8 @@ use anima_geom::{DVec3, RowDirection};
 use anima_ode::Integrator;
 use serde::{Deserialize, Serialize};
 
+use crate::contact_mode::ContactMode;
+
 /// Standard gravity as FLEX3D scenes use it: (0, −9.8, 0), y up (spec S3.1).
 pub const FLEX3D_GRAVITY: DVec3 = DVec3::new(0.0, -9.8, 0.0);
 
@@ -162,6 +164,11 @@ pub struct ModelOptions {
     /// |F_friction|·Δt/m ≤ |v| (spec S3.7 [EXT]). Off in the thesis; large steps need it, or friction
     /// makes a resting particle chatter.
     pub friction_clamp: bool,
+    /// Where contact with static objects is answered: after the step by the thesis's elastic impact
+    /// (the default), or inside the implicit solve (`InSolve`, generalised-α only), inelastic, with
+    /// Coulomb friction of the scene's `ATRITO` coefficient (sticking and sliding) and release when the
+    /// contact would pull (an anima extension). Contacts between surfaces stay after the step either way.
+    pub object_contact: ContactMode,
 }
 
 impl ModelOptions {
@@ -176,6 +183,7 @@ impl ModelOptions {
             row_direction: RowDirection::Down,
             translation: TranslationMode::Continuous,
             friction_clamp: false,
+            object_contact: ContactMode::AfterStep,
         }
     }
 }

@@ -4,6 +4,7 @@ mod broadphase;
 mod desc;
 mod forces;
 pub mod mass_spring;
+mod solve_contact;
 mod world;
 
 pub use desc::*;

@@ -8,6 +8,8 @@ use super::desc::{
     ContactApproach, Flex3dScene, FrictionMode, ModelOptions, StaticResponse, TranslationMode,
 };
 use super::forces::{SurfaceForces, acceleration_with_friction, add_bending_forces, add_spring_forces};
+use super::solve_contact::{StaticContacts, THICKNESS_OF_SPACING};
+use crate::contact_mode::ContactMode;
 
 /// Why a scene could not be turned into a world.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -231,6 +233,8 @@ impl OdeSystem for Model {
 struct Colliders {
     n_static: usize,
     static_prepared: Vec<PreparedTriangle>,
+    /// Corners of the static triangles (for the in-solve contacts' nearest points).
+    static_corners: Vec<[DVec3; 3]>,
     /// Boxes of all triangles: static objects first, then every surface's.
     boxes: Vec<Aabb>,
     /// Particles of each triangle; `u32::MAX` for the corners of static triangles.
@@ -262,6 +266,10 @@ pub struct Flex3dWorld {
     steps_per_frame: usize,
     step: usize,
     counts: CollisionCounts,
+    /// `ATRITO`'s coefficient, the Coulomb coefficient of contacts in the solve.
+    friction: f64,
+    /// How far off a static surface the contacts in the solve keep a particle.
+    contact_thickness: f64,
 }
 
 impl Flex3dWorld {
@@ -375,6 +383,7 @@ impl Flex3dWorld {
                 for t in 0..mesh.n_triangles() {
                     let c = mesh.corners(t);
                     colliders.static_prepared.push(PreparedTriangle::new(c));
+                    colliders.static_corners.push(c);
                     colliders.boxes.push(Aabb::from_points(c));
                     colliders.corners.push([u32::MAX; 3]);
                 }
@@ -405,6 +414,9 @@ impl Flex3dWorld {
             steps_per_frame: (1.0 / (scene.frame_rate_hz * scene.dt_s)).round().max(1.0) as usize,
             step: 0,
             counts: CollisionCounts::default(),
+            friction: scene.friction.coefficient,
+            contact_thickness: THICKNESS_OF_SPACING
+                * scene.surfaces.iter().map(|s| s.spacing_m).fold(f64::INFINITY, f64::min),
         })
     }
 
@@ -452,15 +464,35 @@ impl Flex3dWorld {
 
     /// Advances one step of Δt with the scene's integrator: tentative state from the integrator, then
     /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4).
+    ///
+    /// With `ModelOptions::object_contact` = `InSolve`, contacts with static objects are constrained inside the
+    /// implicit step instead, and the collision pass tests the surfaces only.
     pub fn step(&mut self) -> Result<(), StepError> {
         let t = self.time();
-        self.stepper
-            .step(&mut self.model, t, self.dt, &self.now, &mut self.next)
-            .map_err(|source| StepError::Solver { step: self.step + 1, time: t, source })?;
+        let in_solve = self.options.object_contact == ContactMode::InSolve
+            && self.options.collisions
+            && self.colliders.n_static > 0;
+        let stepped = if in_solve {
+            let mut contacts = StaticContacts {
+                prepared: &self.colliders.static_prepared,
+                corners: &self.colliders.static_corners,
+                grid: &mut self.colliders.static_grid,
+                thickness: self.contact_thickness,
+                friction: self.friction,
+            };
+            self.stepper
+                .step_with_contacts(&mut self.model, &mut contacts, t, self.dt, &self.now, &mut self.next)
+                .map(|stats| self.counts.with_objects += stats.contacts as u64)
+        } else {
+            self.stepper.step(&mut self.model, t, self.dt, &self.now, &mut self.next).map(|_| ())
+        };
+        stepped.map_err(|source| StepError::Solver { step: self.step + 1, time: t, source })?;
         let constraints_changed = self.apply_constraints();
         let hits_before = self.counts;
-        if self.options.collisions && !self.colliders.corners.is_empty() {
-            self.collide();
+        if self.options.collisions && self.colliders.corners.len() > self.colliders.n_static {
+            self.collide(!in_solve);
+        } else if self.options.collisions && !in_solve && !self.colliders.corners.is_empty() {
+            self.collide(true);
         }
         // A multistep method's history no longer describes the motion after a velocity jump (spec
         // S4.2.3: restart after any collision response or constraint discontinuity).
@@ -505,8 +537,9 @@ impl Flex3dWorld {
     /// row-major). Each path x → x̃ is tested against every triangle that does not contain the particle,
     /// static objects and surfaces alike (surfaces at their start-of-step positions); the first hit
     /// (smallest segment parameter, then lowest triangle index) is answered with a 1-D elastic impact, and
-    /// the particle stays where it was at the start of the step.
-    fn collide(&mut self) {
+    /// the particle stays where it was at the start of the step. Without `static_objects` only the
+    /// surfaces' triangles are tested (the static ones are the implicit solve's).
+    fn collide(&mut self, static_objects: bool) {
         let Self { colliders, now, next, model, mass, options, counts, .. } = self;
         let (x, x_new, v_new) = (&now.x, &mut next.x, &mut next.v);
         #[cfg(test)]
@@ -554,9 +587,10 @@ impl Flex3dWorld {
                 }
             };
             if brute_force {
-                (0..corners.len()).for_each(&mut test);
+                let first = if static_objects { 0 } else { n_static };
+                (first..corners.len()).for_each(&mut test);
             } else {
-                if n_static > 0 {
+                if n_static > 0 && static_objects {
                     static_grid.query(&seg, &mut test);
                 }
                 surface_grid.query(&seg, |t| test(t + n_static));

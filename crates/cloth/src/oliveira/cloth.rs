@@ -10,11 +10,12 @@ use anima_geom::{
 use anima_ode::{OdeError, State, Stepper};
 
 use super::bending::BendingElements;
-use super::contact::{Collider, ContactPass};
+use super::contact::{ClearanceCache, Collider, ContactPass, SolveContacts};
 use super::forces::ClothModel;
 use super::material::Material;
 use super::scene::{Centre, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
 use super::springs::Springs;
+use crate::contact_mode::ContactMode;
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -60,8 +61,11 @@ pub struct OliveiraCloth {
     colliders: Vec<Collider>,
     /// Per particle, a lower bound on its distance from every surface (see `Options::cull_collision_tests`).
     clearance: Vec<f64>,
-    /// Per particle, whether the contact pass has answered it this step.
+    /// Per particle, whether the contact pass has answered it this step (with contact in the solve:
+    /// whether it ended the step in contact).
     responded: Vec<bool>,
+    /// Distance bounds of the in-solve contact model.
+    solve_cache: ClearanceCache,
     /// Positions before the strain limit moved them (sized on first use).
     before_limit: Vec<DVec3>,
     material: Material,
@@ -274,6 +278,7 @@ impl OliveiraCloth {
             clearance: vec![0.0; n_vertices],
             before_limit: Vec::new(),
             responded: vec![false; n_vertices],
+            solve_cache: ClearanceCache::default(),
             colliders,
             material,
             restitution: scene.restitution,
@@ -303,9 +308,13 @@ impl OliveiraCloth {
     }
 
     /// One step (Fig. 4.1): integrate the non-contact forces, then test every particle's path and answer
-    /// hits (Eqs. 4.16–4.18).
+    /// hits (Eqs. 4.16–4.18). With `Options::contact` = `InSolve` the contacts are constrained inside the
+    /// implicit step instead, and [`StepReport::hits`] counts the particles in contact at its end.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         let dt = self.next_dt();
+        if self.options.contact == ContactMode::InSolve && !self.colliders.is_empty() {
+            return self.step_with_contacts_in_solve(dt);
+        }
         self.stepper.step(&mut self.model, self.time, dt, &self.now, &mut self.next)?;
         if let Some(tau) = self.options.strain_limit {
             self.limit_strain(tau, dt);
@@ -331,9 +340,50 @@ impl OliveiraCloth {
         if hits > 0 {
             self.first_collision.get_or_insert(self.time + dt);
             self.total_hits += hits as u64;
-            // A multistep method's history no longer describes the state.
-            self.stepper.reset_history();
+            // A multistep method's history no longer describes the state; generalised-α forgets the
+            // acceleration of the particles answered only.
+            self.stepper.reset_history_of(&self.responded);
         }
+        self.finish_step(dt, hits)
+    }
+
+    /// The step with contacts inside the implicit solve (generalised-α): the stepper asks
+    /// [`SolveContacts`] for them at every Newton iteration. Provot's strain limit, when set, still runs
+    /// after the step (and can move a particle off its contact plane).
+    fn step_with_contacts_in_solve(&mut self, dt: f64) -> Result<StepReport, StepError> {
+        let mut contacts = SolveContacts {
+            colliders: &self.colliders,
+            friction: self.material.friction,
+            restitution: self.restitution,
+            cache: &mut self.solve_cache,
+        };
+        let stats = self.stepper.step_with_contacts(
+            &mut self.model,
+            &mut contacts,
+            self.time,
+            dt,
+            &self.now,
+            &mut self.next,
+        )?;
+        if let Some(tau) = self.options.strain_limit {
+            self.limit_strain(tau, dt);
+        }
+        self.responded.fill(false);
+        for report in self.stepper.contact_reports() {
+            if report.regime != anima_ode::contact::Regime::Free {
+                self.responded[report.coordinate as usize] = true;
+            }
+        }
+        let hits = stats.contacts;
+        if hits > 0 {
+            self.first_collision.get_or_insert(self.time + dt);
+            self.total_hits += hits as u64;
+        }
+        self.finish_step(dt, hits)
+    }
+
+    /// Checks finiteness and makes the tentative state the current one.
+    fn finish_step(&mut self, dt: f64, hits: usize) -> Result<StepReport, StepError> {
         if let Some(vertex) =
             (0..self.next.x.len()).find(|&i| !(self.next.x[i].is_finite() && self.next.v[i].is_finite()))
         {
@@ -408,6 +458,18 @@ impl OliveiraCloth {
 
     pub fn triangles(&self) -> &[[u32; 3]] {
         self.mesh.triangles()
+    }
+
+    /// Replaces the particles' positions and velocities (as many as there are particles), for instance to
+    /// start the cloth somewhere the scene's flat start cannot describe. The integrator's history and the
+    /// collision tests' distance bounds start again.
+    pub fn set_state(&mut self, x: &[DVec3], v: &[DVec3]) {
+        assert!(x.len() == self.now.x.len() && v.len() == x.len(), "one position and velocity per particle");
+        self.now.x.copy_from_slice(x);
+        self.now.v.copy_from_slice(v);
+        self.clearance.fill(0.0);
+        self.solve_cache.reset(x.len());
+        self.stepper.reset_history();
     }
 
     pub fn positions(&self) -> &[DVec3] {
@@ -535,6 +597,7 @@ impl OliveiraCloth {
         self.next = State::zeros(n);
         self.clearance = vec![0.0; n];
         self.responded = vec![false; n];
+        self.solve_cache.reset(n);
         self.tracked = tracked;
         self.repelled_edges.clear();
         self.mesh = mesh;

@@ -5,6 +5,7 @@
 
 use anima_geom::{DVec3, Solid};
 use anima_ode::State;
+use anima_ode::contact::{Contact, ContactModel};
 
 use super::scene::{ContactVelocity, Options, SeparatingContact};
 
@@ -180,6 +181,115 @@ impl ContactPass<'_> {
             }
         }
         answered
+    }
+}
+
+/// How far outside a surface the solve keeps a particle in contact, m: enough that round-off cannot put
+/// a particle resting on a surface strictly inside it, far below the cloth's 62.5 mm spacing.
+pub const SOLVE_CONTACT_THICKNESS_M: f64 = 1e-4;
+
+/// Per particle, a position and a lower bound on its distance from every surface there, kept between
+/// the queries of the in-solve contact model so that particles far from every object cost a subtraction.
+#[derive(Debug, Clone, Default)]
+pub struct ClearanceCache {
+    reference: Vec<DVec3>,
+    clearance: Vec<f64>,
+}
+
+impl ClearanceCache {
+    /// Forgets every bound (for a new particle count).
+    pub fn reset(&mut self, n: usize) {
+        self.reference.clear();
+        self.reference.resize(n, DVec3::ZERO);
+        self.clearance.clear();
+        self.clearance.resize(n, 0.0);
+    }
+}
+
+/// The objects as the implicit solve sees them ([`super::scene::Options::contact`] = `InSolve`): a
+/// particle whose path crosses a surface is in contact at the crossing, one that ends inside or within
+/// twice [`SOLVE_CONTACT_THICKNESS_M`] of a surface at its nearest point; the contact plane is moved out
+/// by that thickness. Friction μ is the mean of the cloth's and the object's (Eq. 4.17), the restitution γ of
+/// Eq. 4.16.
+#[derive(Debug)]
+pub struct SolveContacts<'a> {
+    pub colliders: &'a [Collider],
+    /// μ of the cloth.
+    pub friction: f64,
+    pub restitution: f64,
+    pub cache: &'a mut ClearanceCache,
+}
+
+impl ContactModel<DVec3> for SolveContacts<'_> {
+    fn contacts(&mut self, start: &[DVec3], end: &[DVec3], out: &mut Vec<Contact<DVec3>>) {
+        let thickness = SOLVE_CONTACT_THICKNESS_M;
+        if self.cache.reference.len() != start.len() {
+            self.cache.reset(start.len());
+        }
+        for i in 0..start.len() {
+            let (a, b) = (start[i], end[i]);
+            // Every point of the path lies within max(|a − r|, |b − r|) of the reference point r.
+            let r = self.cache.reference[i];
+            let reach = a.distance(r).max(b.distance(r));
+            if self.cache.clearance[i] - reach > thickness {
+                continue;
+            }
+            let found = match first_hit(self.colliders, a, b) {
+                Some((s, normal, k)) => Some((a + (b - a) * s, normal, k)),
+                // Within twice the thickness: a resting particle is found at once and keeps its regime.
+                None => self.nearest(b, 2.0 * thickness),
+            };
+            match found {
+                Some((surface, normal, k)) => {
+                    self.cache.reference[i] = b;
+                    self.cache.clearance[i] = 0.0;
+                    out.push(Contact {
+                        coordinate: i as u32,
+                        normal,
+                        point: surface + normal * thickness,
+                        static_friction: 0.5 * (self.friction + self.colliders[k].friction),
+                        kinetic_friction: 0.5 * (self.friction + self.colliders[k].friction),
+                        restitution: self.restitution,
+                    });
+                }
+                None => {
+                    let d = self.colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
+                    self.cache.reference[i] = b;
+                    // A little less than the distance, so round-off in it cannot let a path through.
+                    self.cache.clearance[i] = d * (1.0 - 1e-9) - 1e-12;
+                }
+            }
+        }
+    }
+}
+
+impl SolveContacts<'_> {
+    /// The surface point nearest to `p`, its outward normal and the object, when `p` is inside an object
+    /// or closer than `thickness` to one (the deepest or nearest first).
+    fn nearest(&self, p: DVec3, thickness: f64) -> Option<(DVec3, DVec3, usize)> {
+        let mut best: Option<(f64, DVec3, DVec3, usize)> = None;
+        for (k, o) in self.colliders.iter().enumerate() {
+            // (A half-space's clearance is its unsigned distance, so the inside test comes first.)
+            if !o.solid.contains(p) && o.solid.clearance(p) > thickness {
+                continue;
+            }
+            let prox = o.solid.proximity(p);
+            let signed = if prox.inside { -prox.distance } else { prox.distance };
+            if signed > thickness || best.is_some_and(|(d, ..)| d <= signed) {
+                continue;
+            }
+            let away = if prox.inside { prox.point - p } else { p - prox.point };
+            let normal = match away.try_normalize() {
+                Some(n) => n,
+                // On the surface: the normal of the face the segment from the object's inside meets.
+                None => o
+                    .solid
+                    .segment_hit(p - DVec3::Z * thickness, p + DVec3::Z * thickness)
+                    .map_or(DVec3::Z, |h| h.normal),
+            };
+            best = Some((signed, prox.point, normal, k));
+        }
+        best.map(|(_, point, normal, k)| (point, normal, k))
     }
 }
 

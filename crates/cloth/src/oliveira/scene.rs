@@ -7,6 +7,7 @@ use anima_ode::Integrator;
 use serde::{Deserialize, Serialize};
 
 use super::material::Material;
+use crate::contact_mode::ContactMode;
 
 /// Gravity in every Oliveira test: (0, 0, −9.81) m/s², z up (Tables 5.1, 5.3, 5.5).
 pub const OLIVEIRA_GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.81);
@@ -204,6 +205,13 @@ pub struct Options {
     /// masses, in up to ten sweeps) and the velocities take the correction over the step. `None` (the
     /// default, as in the thesis) leaves the springs alone; Provot used τ = 0.1.
     pub strain_limit: Option<f64>,
+    /// Where contact with the objects is answered: after the step by Eqs. 4.16–4.18 (the thesis's
+    /// split, the default), or inside the implicit solve (`InSolve`, generalised-α only): normal
+    /// velocity constrained, Coulomb friction with μ the mean of the cloth's and the object's (Eq. 4.17)
+    /// for both sticking and sliding, restitution γ on impact, release when the contact would pull; the
+    /// switches above that shape the split's response (`contact_velocity`, `separating`,
+    /// `recheck_corrected_path`, `edge_contacts`) do not apply to it.
+    pub contact: ContactMode,
 }
 
 impl Options {
@@ -218,6 +226,7 @@ impl Options {
             edge_contacts: false,
             cull_collision_tests: true,
             strain_limit: None,
+            contact: ContactMode::AfterStep,
         }
     }
 }

@@ -122,6 +122,14 @@ pub(crate) struct ContactState<C: Coord> {
     /// The coordinates in contact at the end of the step, their normals and the normal velocity each
     /// must leave with at least (0, or the restitution's bounce).
     pub clamp: Vec<(u32, C, f64)>,
+    /// Per coordinate, the regime, reaction and friction its contact ended the last step with: a contact
+    /// found again starts from them, so a resting or sliding contact keeps its regime from step to step
+    /// instead of starting free (or sticking) every step.
+    pub last_regime: Vec<Regime>,
+    pub last_reaction: Vec<C>,
+    pub last_friction: Vec<C>,
+    /// The coordinates whose `last_*` entries are set.
+    pub last_active: Vec<u32>,
 }
 
 impl<C: Coord> ContactState<C> {
@@ -134,6 +142,10 @@ impl<C: Coord> ContactState<C> {
             z: Vec::new(),
             late: 0,
             clamp: Vec::new(),
+            last_regime: Vec::new(),
+            last_reaction: Vec::new(),
+            last_friction: Vec::new(),
+            last_active: Vec::new(),
         }
     }
 
@@ -149,6 +161,40 @@ impl<C: Coord> ContactState<C> {
         self.z.resize(n, C::default());
         self.late = 0;
         self.clamp.clear();
+        if self.last_regime.len() != n {
+            self.last_regime.clear();
+            self.last_regime.resize(n, Regime::Free);
+            self.last_reaction.clear();
+            self.last_reaction.resize(n, C::default());
+            self.last_friction.clear();
+            self.last_friction.resize(n, C::default());
+            self.last_active.clear();
+        }
+    }
+
+    /// Ends a step: remembers the regimes its contacts ended in.
+    pub fn end(&mut self) {
+        for &i in &self.last_active {
+            self.last_regime[i as usize] = Regime::Free;
+        }
+        self.last_active.clear();
+        for s in &self.slots {
+            if s.regime != Regime::Free {
+                let i = s.contact.coordinate as usize;
+                self.last_regime[i] = s.regime;
+                self.last_reaction[i] = s.reaction;
+                self.last_friction[i] = s.friction;
+                self.last_active.push(s.contact.coordinate);
+            }
+        }
+    }
+
+    /// Forgets the regimes of the last step (the state was changed from outside).
+    pub fn forget(&mut self) {
+        for &i in &self.last_active {
+            self.last_regime[i as usize] = Regime::Free;
+        }
+        self.last_active.clear();
     }
 
     /// Merges the contacts just found: new ones start free, known ones take the fresh geometry.
@@ -160,15 +206,17 @@ impl<C: Coord> ContactState<C> {
             }
             match self.slot_of[i] {
                 0 => {
+                    // A contact of the last step starts in the regime it ended in, with its reaction and
+                    // friction as first estimates (not yet imposed in this step's solve).
                     self.slots.push(Slot {
                         contact: *c,
-                        regime: Regime::Free,
+                        regime: self.last_regime[i],
                         imposed: false,
                         released: false,
                         switches: 0,
                         target: 0.0,
-                        friction: C::default(),
-                        reaction: C::default(),
+                        friction: self.last_friction[i],
+                        reaction: self.last_reaction[i],
                     });
                     self.slot_of[i] = self.slots.len() as u32;
                 }

@@ -55,6 +55,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         }
         // Newton's first iteration, linearised about the start of the step (Baraff–Witkin):
         // b = M (v̂ − v₀) + β (f + K w), solved for Δv = v₁ − v₀.
+        let started = self.profile.is_some().then(std::time::Instant::now);
         self.jac.clear();
         lin.force_and_jacobians(t, &now.x, &now.v, &mut self.f, &mut self.jac);
         let (masses, prescribed) = (lin.masses(), lin.prescribed());
@@ -76,6 +77,10 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 (next.v[i] - now.v[i]) * masses[i] + (self.f[i] + self.b[i]) * beta
             };
         }
+        if let (Some(p), Some(s)) = (&mut self.profile, started) {
+            p.assembly_s += s.elapsed().as_secs_f64();
+            p.newton_iterations += 1;
+        }
         let mut iterations =
             self.solve(lin.pattern(), Filter::Prescribed(prescribed), masses, prescribed, true)?;
         // v̂ goes to `v_hat` (kept in self.w, no longer needed as w), the iterate v₁ to next.v.
@@ -91,6 +96,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             for i in 0..n {
                 self.xk[i] = place(next.x[i], now.x[i], next.v[i], prescribed[i]);
             }
+            let started = self.profile.is_some().then(std::time::Instant::now);
             self.jac.clear();
             lin.force_and_jacobians(t + h, &self.xk, &next.v, &mut self.f, &mut self.jac);
             let (masses, prescribed) = (lin.masses(), lin.prescribed());
@@ -102,6 +108,10 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     self.f[i] * beta - (next.v[i] - self.w[i]) * masses[i]
                 };
                 self.dv[i] = C::default();
+            }
+            if let (Some(p), Some(s)) = (&mut self.profile, started) {
+                p.assembly_s += s.elapsed().as_secs_f64();
+                p.newton_iterations += 1;
             }
             iterations +=
                 self.solve(lin.pattern(), Filter::Prescribed(prescribed), masses, prescribed, true)?;
@@ -118,6 +128,9 @@ impl<C: Coord> ImplicitWorkspace<C> {
             prev.v.copy_from_slice(&now.v);
         }
         self.prev_h = if self.bdf2.is_some() { h } else { 0.0 };
+        if let Some(p) = &mut self.profile {
+            p.steps += 1;
+        }
         Ok(StepStats {
             evaluations: self.newton_iterations,
             solver_iterations: iterations,

@@ -106,6 +106,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         if let Some(a) = &mut self.alpha {
             a.valid = false;
         }
+        self.contact.forget();
     }
 
     /// Solves A δ = b (both filtered) into `self.dv` with the chosen solver, starting CG from the δ
