@@ -72,6 +72,9 @@ impl BodyScene {
 
     fn check(&self) -> Result<(), SceneError> {
         let bad = |f: &str, m: String| Err(SkeletonError::invalid(f, m));
+        if let Err(e) = self.world.check() {
+            return bad("world", e.to_string());
+        }
         if !(self.duration > 0.0 && self.duration.is_finite()) {
             return bad(
                 "duration",

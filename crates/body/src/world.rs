@@ -84,13 +84,22 @@ impl WorldSettings {
         self.dt / f64::from(self.substeps)
     }
 
-    fn check(&self) -> Result<(), BodyError> {
+    /// Whether a world can be built with these settings: positive finite times, at least one (and at
+    /// most 10 000) sub-steps and solver iterations, 1 to 256 signals per actuator (the command buffers
+    /// are sized by it).
+    pub fn check(&self) -> Result<(), BodyError> {
         let bad = |m: String| Err(BodyError::Settings(m));
         if !(self.dt > 0.0 && self.dt.is_finite()) {
             return bad(format!("dt must be a positive number of seconds, found {}", self.dt));
         }
-        if self.substeps == 0 {
-            return bad("substeps must be at least 1".into());
+        if !(1..=10_000).contains(&self.substeps) {
+            return bad(format!("substeps must lie in 1..=10000, found {}", self.substeps));
+        }
+        if !(1..=256).contains(&self.max_signals_per_actuator) {
+            return bad(format!(
+                "max_signals_per_actuator must lie in 1..=256, found {}",
+                self.max_signals_per_actuator
+            ));
         }
         if !self.gravity.is_finite() {
             return bad(format!("gravity must be finite, found {}", self.gravity));
@@ -100,8 +109,9 @@ impl WorldSettings {
         {
             return bad(format!("ground needs a finite height and μ ≥ 0, found {g:?}"));
         }
-        if self.solver.iterations == 0 || self.solver.pgs_iterations == 0 {
-            return bad("solver iterations must be at least 1".into());
+        let its = [self.solver.iterations, self.solver.pgs_iterations];
+        if its.iter().any(|&n| !(1..=10_000).contains(&n)) {
+            return bad(format!("solver iterations must lie in 1..=10000, found {its:?}"));
         }
         Ok(())
     }

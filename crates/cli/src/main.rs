@@ -5,10 +5,11 @@ mod progress;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
 use anima_geom::DVec3;
 use anima_lab::optimise::{OptimiseOptions, optimise};
-use anima_lab::run::{Detail, Flex3dSwitches, Overrides, RunOptions, Summary, write_summary};
+use anima_lab::run::{Detail, Flex3dSwitches, Overrides, RunOptions, SolveOptions, Summary, write_summary};
 use anima_ode::{Integrator, LinearSolver};
 use anima_scene::{LoadOptions, LoadedFlex3d, Scene};
 use anyhow::{Context, Result};
@@ -117,6 +118,15 @@ enum SolverArg {
     TwoLevel,
 }
 
+/// Where contact with static objects is answered.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ContactModeArg {
+    /// After the integrator's step, by the model's own response (the theses' split).
+    AfterStep,
+    /// Inside generalised-α's implicit solve: constrained normal velocity, Coulomb friction.
+    InSolve,
+}
+
 /// FLEX3D's friction reading (spec S7.2).
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum FrictionArg {
@@ -157,6 +167,16 @@ struct RunArgs {
     /// Linear solver of the implicit integrators.
     #[arg(long, value_enum)]
     linear_solver: Option<SolverArg>,
+    /// Generalised-α's spectral radius at infinite frequency, in [0, 1]: how strongly it damps the
+    /// modes a step cannot resolve (0: in one step; 1: not at all, the implicit midpoint rule).
+    #[arg(long, value_parser = parse_unit)]
+    rho_inf: Option<f64>,
+    /// Newton iterations per step of generalised-α.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100))]
+    newton_iterations: Option<u32>,
+    /// Where contact with static objects is answered (FLEX3D and Oliveira scenes).
+    #[arg(long, value_enum)]
+    contact_mode: Option<ContactModeArg>,
     /// Time step in seconds (overrides the scene's: DELTA_t, dt_s, a drape's step rule, a figure's
     /// control step).
     #[arg(long)]
@@ -230,6 +250,13 @@ struct OptimiseArgs {
     quiet: bool,
 }
 
+fn parse_unit(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a number in [0, 1], found `{s}`")),
+    }
+}
+
 fn parse_gravity(s: &str) -> Result<DVec3, String> {
     match s.to_ascii_lowercase().as_str() {
         "on" => Ok(FLEX3D_GRAVITY),
@@ -268,6 +295,10 @@ impl RunArgs {
             duration: self.duration,
             // A .PAR script takes gravity when it is read (its GRAVIDADE default is "on").
             gravity: self.gravity,
+            contact_mode: self.contact_mode.map(|c| match c {
+                ContactModeArg::AfterStep => ContactMode::AfterStep,
+                ContactModeArg::InSolve => ContactMode::InSolve,
+            }),
             flex3d: Flex3dSwitches {
                 friction: self.friction.map(|f| match f {
                     FrictionArg::Literal => FrictionMode::Literal,
@@ -304,11 +335,15 @@ impl RunArgs {
             frames: !self.no_frames,
             frame0: self.frame0,
             pictures: !self.no_pictures,
-            linear_solver: self.linear_solver.map(|s| match s {
-                SolverArg::Cg => LinearSolver::default_cg(),
-                SolverArg::Cholesky => LinearSolver::SparseCholesky,
-                SolverArg::TwoLevel => LinearSolver::default_two_level(),
-            }),
+            solve: SolveOptions {
+                linear_solver: self.linear_solver.map(|s| match s {
+                    SolverArg::Cg => LinearSolver::default_cg(),
+                    SolverArg::Cholesky => LinearSolver::SparseCholesky,
+                    SolverArg::TwoLevel => LinearSolver::default_two_level(),
+                }),
+                rho_inf: self.rho_inf,
+                newton_iterations: self.newton_iterations.map(|k| k as usize),
+            },
             reference,
         })
     }
@@ -325,6 +360,23 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     let opts = args.options()?;
     if opts.reference.is_some() && !matches!(scene, Scene::Sheet(_)) {
         anyhow::bail!("--reference applies to sheet scenes only");
+    }
+    // Solver options apply to the implicit integrators only, ρ∞ and Newton to generalised-α only.
+    let integrator = match &scene {
+        Scene::Flex3d(l) => Some(l.scene.integrator),
+        Scene::Sheet(s) => Some(s.integrator),
+        Scene::Oliveira(l) => Some(l.scene.integrator),
+        Scene::Body(_) | Scene::Character(_) => None,
+    };
+    if opts.solve.linear_solver.is_some() && !integrator.is_some_and(Integrator::is_implicit) {
+        anyhow::bail!(
+            "--linear-solver applies to the implicit integrators only (implicit-euler, bdf2, generalized-alpha)"
+        );
+    }
+    if (opts.solve.rho_inf.is_some() || opts.solve.newton_iterations.is_some())
+        && integrator != Some(Integrator::GeneralizedAlpha)
+    {
+        anyhow::bail!("--rho-inf and --newton-iterations apply to generalized-alpha only");
     }
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.

@@ -164,9 +164,10 @@ fn largest_stable_step(scene: &BenchSheet, integrator: Integrator) -> f64 {
 fn sheet_curves(repo: &Repo, scene: &BenchSheet, quick: bool) -> Result<(Vec<Curve>, Vec<DVec3>)> {
     let reference = reference(repo, scene)?;
     let mut curves = Vec::new();
-    // Each implicit method twice: with conjugate gradients and with the sparse Cholesky solve.
+    // Backward Euler and BDF2 twice: with conjugate gradients and with the sparse Cholesky solve;
+    // generalised-α with its own default (conjugate gradients with the two-level preconditioner).
     let variants = Integrator::ALL.into_iter().flat_map(|i| {
-        let solvers = if i.is_implicit() {
+        let solvers = if i.is_implicit() && i != Integrator::GeneralizedAlpha {
             vec![Some(LinearSolver::default_cg()), Some(LinearSolver::SparseCholesky)]
         } else {
             vec![None]
@@ -201,6 +202,9 @@ fn sheet_curves(repo: &Repo, scene: &BenchSheet, quick: bool) -> Result<(Vec<Cur
             }
             Integrator::ImplicitEuler | Integrator::Bdf2 => {
                 constant(&[1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1e-3, 5e-4])
+            }
+            Integrator::GeneralizedAlpha => {
+                constant(&[1.0 / 30.0, 1.0 / 60.0, 1.0 / 120.0, 1.0 / 240.0, 1.0 / 480.0])
             }
             _ => constant(&[5e-4, 2e-4, 1e-4, 5e-5]),
         };
@@ -496,15 +500,13 @@ const PEERS: [(&str, &str, &str, &str); 7] = [
     ("MuJoCo flex, implicit (`discrete`), 1/60 s", "0.63 s", "9.0 s", "339–346 mm"),
 ];
 
-/// Fastest peer time for N = 32 and N = 64, s (Warp).
-const FASTEST_PEER: [f64; 2] = [0.34, 4.29];
-
 fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
     let n = scene.spec.n;
-    let (common, fastest) = if n <= 32 { (2e-4, FASTEST_PEER[0]) } else { (1e-4, FASTEST_PEER[1]) };
+    let common = if n <= 32 { 2e-4 } else { 1e-4 };
     let mut out = format!(
-        "### N = {n}: anima at the common step ({common:.0e} s) and at each method's largest stable step\n\n\
-         | integrator | step (s) | wall time | × fastest peer (Warp {fastest} s) | centre-of-mass error | RMS error |\n|---|---|---|---|---|---|\n"
+        "### N = {n}: anima at the common step ({common:.0e} s), at each explicit method's largest stable step and \
+         at the implicit methods' large steps\n\n\
+         | integrator | step (s) | wall time | centre-of-mass error | RMS error |\n|---|---|---|---|---|\n"
     );
     for c in curves {
         let mut rows: Vec<(&str, Point)> = Vec::new();
@@ -527,17 +529,16 @@ fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
         for (what, p) in rows {
             let _ = writeln!(
                 out,
-                "| {} | {:.2e} ({what}) | {:.3} s | {:.2}× faster | {:.2} mm | {:.2} mm |",
+                "| {} | {:.2e} ({what}) | {:.3} s | {:.2} mm | {:.2} mm |",
                 c.label(),
                 p.knob,
                 p.seconds,
-                fastest / p.seconds,
                 p.com_error * 1e3,
                 p.error * 1e3
             );
         }
         if !c.points.iter().any(|p| (p.knob - common).abs() < 1e-12) && !c.integrator.is_adaptive() {
-            let _ = writeln!(out, "| {} | {common:.0e} (common) | unstable | — | — | — |", c.label());
+            let _ = writeln!(out, "| {} | {common:.0e} (common) | unstable | — | — |", c.label());
         }
     }
     out.push('\n');
@@ -546,15 +547,17 @@ fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
 
 fn peers_section(tables: &str) -> String {
     let mut out = String::from(
-        "## The standard sheet beside other simulators\n\nThe peers' wall times for 1 simulated second, from \
-         `benchmarks.md` (same machine class, 2 cores):\n\n| system and method | N = 32 | N = 64 | centre-of-mass error |\n|---|---|---|---|\n",
+        "## The standard sheet beside other simulators\n\nWhat other simulators measured for 1 simulated second when \
+         `benchmarks.md` was written (same machine class, 2 cores, another day). These are context, not the \
+         denominator of a ratio: a speed ratio needs both timed alternately in one run (`cargo xtask bench --peers` \
+         is where that belongs).\n\n| system and method | N = 32 | N = 64 | centre-of-mass error |\n|---|---|---|---|\n",
     );
     for (name, a, b, e) in PEERS {
         let _ = writeln!(out, "| {name} | {a} | {b} | {e} |");
     }
     out.push_str(
-        "\nanima's numbers below are single-threaded and f64; \"× fastest peer\" divides Warp's time by anima's. The \
-         centre-of-mass error is the distance from the reference centre of mass in `benchmarks.md`.\n\n",
+        "\nanima's numbers below are single-threaded and f64, timed in this run. The centre-of-mass error is the \
+         distance from the reference centre of mass in `benchmarks.md`.\n\n",
     );
     out.push_str(tables);
     out

@@ -84,6 +84,14 @@ pub fn check(scene: &Flex3dScene) -> Result<(), FieldError> {
     {
         return bad("dt_s".into(), format!("expected {why}"));
     }
+    if scene.options.object_contact == anima_cloth::contact_mode::ContactMode::InSolve
+        && scene.integrator != anima_ode::Integrator::GeneralizedAlpha
+    {
+        return bad(
+            "options.object_contact".into(),
+            format!("expected generalized-alpha for contact in the solve, found {}", scene.integrator),
+        );
+    }
     finite("gravity_m_s2", scene.gravity_m_s2)?;
     finite("external_force_n", scene.external_force_n)?;
     non_negative("friction.coefficient".into(), scene.friction.coefficient)?;

@@ -353,6 +353,9 @@ impl File<'_> {
             let why = format!("expected a positive number of seconds, found {}", scene.duration_s);
             return Err(self.invalid_at(text, &format!("{prefix}duration_s"), why));
         }
+        if let Err(why) = crate::oliveira::check_contact(scene) {
+            return Err(self.invalid_at(text, &format!("{prefix}options.contact"), why));
+        }
         let n = scene.cloth.vertices_per_side;
         let max_side = crate::limits::MAX_PARTICLES.isqrt();
         if n > max_side {
@@ -410,6 +413,7 @@ impl File<'_> {
         check_positive(self, text, "duration", scene.duration)?;
         check_positive(self, text, "frame_interval", scene.frame_interval)?;
         check_positive(self, text, "world.dt", scene.world.dt)?;
+        scene.world.check().map_err(|e| self.invalid_at(text, "world", e.to_string()))?;
         if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval) {
             return Err(self.invalid_at(text, "duration", why));
         }

@@ -110,6 +110,21 @@ impl LoadedOliveira {
     }
 }
 
+/// Contact inside the solve needs generalised-α (the one integrator that constrains contacts in its
+/// Newton solve): `Err` says so when the scene asks for it with another.
+pub fn check_contact(scene: &OliveiraScene) -> Result<(), String> {
+    use anima_cloth::contact_mode::ContactMode;
+    if scene.options.contact == ContactMode::InSolve
+        && scene.integrator != anima_ode::Integrator::GeneralizedAlpha
+    {
+        return Err(format!(
+            "expected generalized-alpha for contact in the solve (options.contact: InSolve), found {}",
+            scene.integrator
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a static scene from RON text. Errors carry the line and column, what was expected and what
 /// was found.
 pub fn from_ron_str(src: &str) -> Result<OliveiraScene, ParseError> {

@@ -80,9 +80,7 @@ pub fn run(
         anyhow::bail!("surface `{}`: expected {why}", s.name);
     }
     let mut world = Flex3dWorld::new(scene, loaded.meshes()).context("building the scene")?;
-    if let Some(solver) = opts.linear_solver {
-        world.stepper_mut().set_linear_solver(solver);
-    }
+    opts.solve.configure(world.stepper_mut());
     let mut warnings = Vec::new();
     let damping = (scene.friction.coefficient > 0.0).then(|| {
         format!("{:?} friction μ = {}", scene.friction.mode, scene.friction.coefficient).to_lowercase()

@@ -9,6 +9,7 @@ pub mod sheet;
 
 use std::path::{Path, PathBuf};
 
+use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FrictionMode, StaticResponse};
 use anima_cloth::oliveira::StepRule;
 use anima_geom::DVec3;
@@ -31,8 +32,8 @@ pub struct RunOptions {
     pub frame0: bool,
     /// Render `final.png` and a `frames.png` contact sheet (and, for figures, a picture per frame).
     pub pictures: bool,
-    /// The linear solver of the implicit integrators (`None`: the integrator's default).
-    pub linear_solver: Option<LinearSolver>,
+    /// How the implicit integrators solve (`None` everywhere: the integrator's defaults).
+    pub solve: SolveOptions,
     /// Sheet scenes: reference positions (another run's `final.obj`); the summary then reports the RMS
     /// distance to them.
     pub reference: Option<Vec<DVec3>>,
@@ -57,6 +58,32 @@ impl RunOptions {
     /// The folder pictures go to, when pictures are drawn.
     fn picture_dir(&self) -> Option<&Path> {
         self.out_dir.as_deref().filter(|_| self.pictures)
+    }
+}
+
+/// How an implicit integrator solves its steps; `None` keeps the integrator's default.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SolveOptions {
+    pub linear_solver: Option<LinearSolver>,
+    /// Generalised-α's spectral radius at infinite frequency ρ∞ in [0, 1] (0: unresolved modes damped in
+    /// one step; 1: the undamped implicit midpoint rule).
+    pub rho_inf: Option<f64>,
+    /// Newton iterations per step of generalised-α.
+    pub newton_iterations: Option<usize>,
+}
+
+impl SolveOptions {
+    /// Sets these choices on a run's stepper.
+    pub fn configure(&self, stepper: &mut anima_ode::Stepper<DVec3>) {
+        if let Some(s) = self.linear_solver {
+            stepper.set_linear_solver(s);
+        }
+        if let Some(r) = self.rho_inf {
+            stepper.set_spectral_radius(r);
+        }
+        if let Some(k) = self.newton_iterations {
+            stepper.set_newton_iterations(k);
+        }
     }
 }
 
@@ -171,6 +198,8 @@ pub struct Overrides {
     pub duration: Option<f64>,
     /// Gravity, m/s² (FLEX3D and Oliveira scenes; FLEX3D `.PAR` scripts take it when loading).
     pub gravity: Option<DVec3>,
+    /// Where contact with static objects is answered (FLEX3D and Oliveira scenes).
+    pub contact_mode: Option<ContactMode>,
     pub flex3d: Flex3dSwitches,
 }
 
@@ -231,6 +260,9 @@ impl Overrides {
                 if let Some(g) = self.gravity {
                     s.gravity_m_s2 = g;
                 }
+                if let Some(c) = self.contact_mode {
+                    s.options.object_contact = c;
+                }
                 let f = &self.flex3d;
                 if let Some(m) = f.friction {
                     s.friction.mode = m;
@@ -249,6 +281,9 @@ impl Overrides {
                 }
             }
             Scene::Sheet(s) => {
+                if self.contact_mode.is_some() {
+                    return Err(not_for("--contact-mode (the standard sheets touch no object)"));
+                }
                 if self.gravity.is_some() {
                     return Err(not_for(
                         "--gravity (the standard sheet's gravity is part of its definition)",
@@ -278,10 +313,15 @@ impl Overrides {
                 if let Some(g) = self.gravity {
                     s.gravity_m_s2 = g;
                 }
+                if let Some(c) = self.contact_mode {
+                    s.options.contact = c;
+                }
             }
             Scene::Body(_) | Scene::Character(_) => {
-                if self.integrator.is_some() || self.gravity.is_some() {
-                    return Err(not_for("--integrator or --gravity (a figure's world sets them)"));
+                if self.integrator.is_some() || self.gravity.is_some() || self.contact_mode.is_some() {
+                    return Err(not_for(
+                        "--integrator, --gravity or --contact-mode (a figure's world sets them)",
+                    ));
                 }
                 let (world, scene_duration) = match scene {
                     Scene::Body(l) => (&mut l.scene.world, &mut l.scene.duration),
@@ -305,7 +345,7 @@ impl Overrides {
         let problem = match scene {
             Scene::Flex3d(l) => anima_scene::flex3d::check(&l.scene).err().map(|e| e.to_string()),
             Scene::Sheet(s) => s.check().err().map(|e| e.to_string()),
-            Scene::Oliveira(_) => None,
+            Scene::Oliveira(l) => anima_scene::oliveira::check_contact(&l.scene).err(),
             Scene::Body(l) => {
                 anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval)
             }
@@ -314,7 +354,7 @@ impl Overrides {
             }
         };
         match problem {
-            Some(why) => anyhow::bail!("with --dt and --duration as given: {why}"),
+            Some(why) => anyhow::bail!("with the options as given: {why}"),
             None => Ok(()),
         }
     }

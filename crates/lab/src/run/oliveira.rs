@@ -61,9 +61,7 @@ pub fn run(
     progress: &mut dyn Progress,
 ) -> Result<Summary> {
     let mut cloth = loaded.build().context("building the drape")?;
-    if let Some(solver) = opts.linear_solver {
-        cloth.stepper_mut().set_linear_solver(solver);
-    }
+    opts.solve.configure(cloth.stepper_mut());
     let mut cloth = loaded.with_remesher(cloth);
     let duration = loaded.scene.duration_s;
     let n_frames = ((duration * FRAME_RATE_HZ).round() as usize).max(1);

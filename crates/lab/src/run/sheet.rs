@@ -51,9 +51,7 @@ pub fn run(
     let n_springs = net.springs().len();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
-    if let Some(solver) = opts.linear_solver {
-        sim.stepper_mut().set_linear_solver(solver);
-    }
+    opts.solve.configure(sim.stepper_mut());
     let mut warnings = Vec::new();
     let pinned = sim.network.pinned().to_vec();
     let v = vec![DVec3::ZERO; n];
