@@ -362,7 +362,18 @@ impl File<'_> {
             let why = format!("expected at most {max_side} vertices a side, found {n}");
             return Err(self.invalid_at(text, &format!("{prefix}cloth.vertices_per_side"), why));
         }
-        let Err(e) = loaded.build() else { return Ok(()) };
+        let e = match loaded.build() {
+            Ok(cloth) => {
+                let dt = loaded.step_estimate(&cloth);
+                return match crate::limits::run_length_problem(scene.duration_s, dt, None) {
+                    Some(why) => {
+                        Err(self.invalid_at(text, &format!("{prefix}time_step"), format!("expected {why}")))
+                    }
+                    None => Ok(()),
+                };
+            }
+            Err(e) => e,
+        };
         let sites = anima_format::ron_path::field_sites(text);
         let field = match &e {
             // The material names its bad field in the message: `field `young_modulus_pa` is out of range`.

@@ -94,6 +94,20 @@ impl LoadedOliveira {
         OliveiraCloth::new(&self.scene, self.meshes.iter().map(|(_, m)| m.clone()).collect())
     }
 
+    /// The step the scene's rule gives `cloth` (built from this scene) at rest: the fixed step, or the
+    /// smaller of the start-up step and β·π·√(m_min/k_max) (Eq. 4.6). A remesher may make it smaller as
+    /// the run goes; it is a lower bound on the steps a run of the scene takes.
+    pub fn step_estimate(&self, cloth: &OliveiraCloth) -> f64 {
+        use anima_cloth::oliveira::StepRule;
+        match self.scene.time_step {
+            StepRule::Fixed { dt_s } => dt_s,
+            StepRule::Provot { beta, startup_dt_s } => {
+                let rule = beta * std::f64::consts::PI * (cloth.min_mass() / cloth.max_stiffness()).sqrt();
+                startup_dt_s.map_or(rule, |s| s.min(rule))
+            }
+        }
+    }
+
     /// The scene's remesher as the cloth crate takes it (`Static` for a static scene).
     pub fn method(&self) -> AdaptiveMethod {
         match &self.remesher {

@@ -77,7 +77,13 @@ pub fn run(
     let mut write_error = None;
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
+    let mut too_long = false;
     let ended = run_drape(&mut cloth, duration, |c, report, _| {
+        // A remesher can shrink the step as the run goes: the run is bounded all the same.
+        if c.cloth().steps() as f64 >= anima_scene::limits::MAX_STEPS {
+            too_long = true;
+            return ControlFlow::Break(());
+        }
         min_dt = min_dt.min(report.dt);
         max_dt = max_dt.max(report.dt);
         let t = c.cloth().time();
@@ -111,6 +117,10 @@ pub fn run(
         all_finite: !matches!(ended, Ended::Failed(_)),
         error: match &ended {
             Ended::Failed(e) => Some(e.to_string()),
+            _ if too_long => Some(format!(
+                "stopped after {:e} steps (anima_scene::limits::MAX_STEPS)",
+                anima_scene::limits::MAX_STEPS
+            )),
             _ => None,
         },
         warnings: Vec::new(),
