@@ -71,7 +71,7 @@ impl Method {
     }
 
     pub fn step_label(&self) -> String {
-        if self.dt >= 1e-3 { format!("1/{:.0} s", 1.0 / self.dt) } else { format!("{:.0e} s", self.dt) }
+        if self.dt >= 1e-3 { format!("1/{:.0} s", 1.0 / self.dt) } else { format!("{:.2e} s", self.dt) }
     }
 }
 
@@ -586,8 +586,16 @@ fn breakdown_section() {
 fn drapes_section() -> Result<(), Error> {
     let contact_in = ContactMode::InSolve;
     let after = ContactMode::AfterStep;
+    let alpha_60 = DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 60.0, contact_in);
     let methods = [
-        DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 60.0, contact_in),
+        alpha_60,
+        DrapeMethod { method: Method { rho_inf: Some(0.0), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod { method: Method { rho_inf: Some(0.4), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod { method: Method { newton: Some(8), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod {
+            method: Method { solver: Some(LinearSolver::SparseCholesky), ..alpha_60.method },
+            ..alpha_60
+        },
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 120.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 240.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 1000.0, contact_in),
