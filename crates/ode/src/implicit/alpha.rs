@@ -217,7 +217,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         } else {
             self.contact.slots.clear();
         }
-        self.evaluate(lin, &c, t, now, next);
+        self.evaluate(lin, &c, t, now, next, true);
         // The rigid-aggregation preconditioner takes its patches' rotations about the predicted end
         // positions and builds its coarse matrix at the step's first solve.
         self.coarse_stale = true;
@@ -302,11 +302,14 @@ impl<C: Coord> ImplicitWorkspace<C> {
             self.trial.copy_from_slice(&next.v);
             let mut step = 1.0;
             let halvings = if regimes_changed { 0 } else { MAX_HALVINGS };
+            // After the last planned iteration without contacts no solve follows: the trial point needs
+            // its residual only, not a new matrix.
+            let with_matrix = contacts.is_some() || newton < self.newton_iterations;
             for attempt in 0..=halvings {
                 for i in 0..n {
                     next.v[i] = self.trial[i] + self.delta[i] * step;
                 }
-                self.evaluate(lin, &c, t, now, next);
+                self.evaluate(lin, &c, t, now, next, with_matrix);
                 evaluations += 1;
                 let trial = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
                 if trial <= GROWTH_ALLOWED * merit || attempt == halvings {
@@ -391,6 +394,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         t: f64,
         now: &State<C>,
         next: &mut State<C>,
+        with_matrix: bool,
     ) {
         let started = self.profile.is_some().then(Instant::now);
         let n = now.len();
@@ -409,19 +413,25 @@ impl<C: Coord> ImplicitWorkspace<C> {
             self.xk[i] = now.x[i] * alpha_f + x1 * (1.0 - alpha_f);
             self.w[i] = now.v[i] * alpha_f + w * (1.0 - alpha_f);
         }
-        lin.force_and_system(
-            t + (1.0 - alpha_f) * h,
-            &self.xk,
-            &self.w,
-            c.beta_v,
-            c.beta_x,
-            &mut self.f,
-            &mut self.a.diag,
-            &mut self.a.off,
-            &mut self.jac,
-        );
-        let (masses, prescribed) = (lin.masses(), lin.prescribed());
-        self.a.add_masses(masses);
+        let t_star = t + (1.0 - alpha_f) * h;
+        if with_matrix {
+            lin.force_and_system(
+                t_star,
+                &self.xk,
+                &self.w,
+                c.beta_v,
+                c.beta_x,
+                &mut self.f,
+                &mut self.a.diag,
+                &mut self.a.off,
+                &mut self.jac,
+            );
+            self.a.add_masses(lin.masses());
+        } else {
+            lin.force(t_star, &self.xk, &self.w, &mut self.f, &mut self.jac);
+        }
+        let masses = lin.masses();
+        let prescribed = lin.prescribed();
         let a0 = &self.alpha.as_ref().expect("present").a;
         for i in 0..n {
             self.b[i] = if prescribed[i] {

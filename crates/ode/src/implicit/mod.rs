@@ -55,6 +55,16 @@ pub trait Linearized<C: Coord> {
     /// [`Linearized::pattern`]. Both must be symmetric: block (j, i) is the transpose of block (i, j).
     fn force_and_jacobians(&mut self, t: f64, x: &[C], v: &[C], f: &mut [C], jac: &mut Jacobians<C>);
 
+    /// Writes the force f(t, x, v) alone (not divided by the mass), where a step needs a residual but
+    /// no new matrix (generalised-α's last line-search point). The default goes through
+    /// [`Linearized::force_and_jacobians`] and `scratch`; a system with a cheaper force overrides it, and
+    /// must give the same force to the bit.
+    fn force(&mut self, t: f64, x: &[C], v: &[C], f: &mut [C], scratch: &mut Jacobians<C>) {
+        scratch.resize(x.len(), self.pattern().len());
+        scratch.clear();
+        self.force_and_jacobians(t, x, v, f, scratch);
+    }
+
     /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass: `diag`
     /// gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off` gets −β_v D_ij − β_x K_ij on
     /// the pattern. The implicit steps call this once per Newton iteration; the default goes through
