@@ -7,6 +7,9 @@
 //! cargo run --release -p anima-cloth --example large_steps -- sheet      # standard sheet N = 64, 1 s
 //! cargo run --release -p anima-cloth --example large_steps -- breakdown  # where a step's time goes
 //! cargo run --release -p anima-cloth --example large_steps -- drapes     # Oliveira's three fine drapes
+//! NEWTON=2 SOLVER=two-level CGTOL=0.03 cargo run --release -p anima-cloth --example large_steps -- probe
+//!                                                    # one generalised-α sheet run, set from the environment
+//! QUICK=1 REPEATS=5 …  -- sheet                      # the first four sheet rows only, five alternated runs
 //! cargo run --release -p anima-cloth --example large_steps -- all
 //! ```
 //!
