@@ -7,6 +7,9 @@
 //! cargo run --release -p anima-cloth --example large_steps -- sheet      # standard sheet N = 64, 1 s
 //! cargo run --release -p anima-cloth --example large_steps -- breakdown  # where a step's time goes
 //! cargo run --release -p anima-cloth --example large_steps -- drapes     # Oliveira's three fine drapes
+//! NEWTON=2 SOLVER=two-level CGTOL=0.03 cargo run --release -p anima-cloth --example large_steps -- probe
+//!                                                    # one generalised-α sheet run, set from the environment
+//! QUICK=1 REPEATS=5 …  -- sheet                      # the first four sheet rows only, five alternated runs
 //! cargo run --release -p anima-cloth --example large_steps -- all
 //! ```
 //!
@@ -71,7 +74,7 @@ impl Method {
     }
 
     pub fn step_label(&self) -> String {
-        if self.dt >= 1e-3 { format!("1/{:.0} s", 1.0 / self.dt) } else { format!("{:.0e} s", self.dt) }
+        if self.dt >= 1e-3 { format!("1/{:.0} s", 1.0 / self.dt) } else { format!("{:.2e} s", self.dt) }
     }
 }
 
@@ -251,6 +254,8 @@ pub fn sheet_reference(spec: &SheetSpec) -> Result<Vec<DVec3>, Error> {
 pub struct SheetRow {
     pub method: Method,
     pub wall_s: f64,
+    pub min_s: f64,
+    pub max_s: f64,
     pub com_error_m: f64,
     pub rms_m: f64,
     pub per_step_ms: f64,
@@ -282,10 +287,14 @@ pub fn sheet_table(spec: &SheetSpec, methods: &[Method], repeats: usize) -> Resu
             let out = out.expect("ran at least once");
             let com = net.centre_of_mass(&out.x);
             let finite = out.x.iter().all(|p| p.is_finite());
+            let (min_s, max_s) =
+                (w.iter().copied().fold(f64::INFINITY, f64::min), w.iter().copied().fold(0.0, f64::max));
             let wall_s = median(w);
             SheetRow {
                 method: *m,
                 wall_s,
+                min_s,
+                max_s,
                 com_error_m: if finite { com.distance(com_ref) } else { f64::NAN },
                 rms_m: if finite { rms(&out.x, &reference) } else { f64::NAN },
                 per_step_ms: wall_s * 1e3 / out.steps.max(1) as f64,
@@ -513,15 +522,18 @@ fn sheet_section() -> Result<(), Error> {
     let spec = SheetSpec::standard(64);
     let dt = 1.0 / 60.0;
     let ga = |dt: f64| Method::new(Integrator::GeneralizedAlpha, dt);
+    let two_level = Some(LinearSolver::default_two_level());
     let mut methods = vec![
         Method::new(Integrator::SymplecticEuler, 1e-4),
-        Method::new(Integrator::SymplecticEuler, 1.5e-4),
         ga(dt),
+        Method::new(Integrator::SymplecticEuler, 1.5e-4),
+        Method { solver: two_level, newton: Some(4), ..ga(dt) },
         ga(1.0 / 30.0),
         ga(1.0 / 120.0),
         ga(1.0 / 240.0),
+        Method { newton: Some(3), ..ga(dt) },
         Method { newton: Some(4), ..ga(dt) },
-        Method { newton: Some(2), ..ga(dt) },
+        Method { solver: two_level, newton: Some(2), ..ga(dt) },
         Method { rho_inf: Some(0.0), ..ga(dt) },
         Method { rho_inf: Some(0.4), ..ga(dt) },
         Method { solver: Some(LinearSolver::SparseCholesky), newton: Some(8), ..ga(dt) },
@@ -530,20 +542,29 @@ fn sheet_section() -> Result<(), Error> {
         Method::new(Integrator::ImplicitEuler, dt),
         Method::new(Integrator::Bdf2, dt),
     ];
+    let repeats = std::env::var("REPEATS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
     if std::env::var("QUICK").is_ok() {
-        methods.truncate(3);
+        methods.truncate(4);
     }
-    let rows = sheet_table(&spec, &methods, 3)?;
-    println!("## Standard sheet, N = 64, 1 s (single thread, f64; medians of 3 alternated runs)\n");
-    println!("| method | step | wall time | ms per step | CoM error | RMS error | CG iterations | failure |");
-    println!("|---|---|---|---|---|---|---|---|");
+    let rows = sheet_table(&spec, &methods, repeats)?;
+    let se = &rows[0];
+    println!(
+        "## Standard sheet, N = 64, 1 s (single thread, f64; medians of {repeats} alternated runs, min–max)\n"
+    );
+    println!(
+        "| method | step | wall time (min–max) | ms per step | vs symplectic Euler at 1e-4 s | CoM error | RMS error | CG iterations | failure |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
     for r in &rows {
         println!(
-            "| {} | {} | {:.3} s | {:.2} | {:.2} mm | {:.2} mm | {} | {} |",
+            "| {} | {} | {:.3} s ({:.3}–{:.3}) | {:.2} | {:.2}× | {:.2} mm | {:.2} mm | {} | {} |",
             r.method.label(),
             r.method.step_label(),
             r.wall_s,
+            r.min_s,
+            r.max_s,
             r.per_step_ms,
+            se.wall_s / r.wall_s,
             r.com_error_m * 1e3,
             r.rms_m * 1e3,
             r.outcome.solver_iterations,
@@ -572,6 +593,11 @@ fn breakdown_section() {
             ..Method::new(Integrator::GeneralizedAlpha, dt)
         },
         Method { solver: Some(LinearSolver::default_cg()), ..Method::new(Integrator::GeneralizedAlpha, dt) },
+        Method {
+            solver: Some(LinearSolver::default_two_level()),
+            newton: Some(4),
+            ..Method::new(Integrator::GeneralizedAlpha, dt)
+        },
         Method::new(Integrator::GeneralizedAlpha, dt),
     ];
     for m in methods {
@@ -583,11 +609,70 @@ fn breakdown_section() {
     println!();
 }
 
+/// One generalised-α run of the standard sheet set from the environment (`DT`, `NEWTON`, `RHO`,
+/// `SOLVER` = cg | cholesky | two-level | aggregation, `CGTOL`), printed on one line.
+fn probe_section() -> Result<(), Error> {
+    let spec = SheetSpec::standard(64);
+    let reference = sheet_reference(&spec)?;
+    let com_ref = reference_com(64);
+    let net = spec.build();
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
+    let dt = env("DT").unwrap_or(1.0 / 60.0);
+    let mut m = Method::new(Integrator::GeneralizedAlpha, dt);
+    m.newton = env("NEWTON").map(|k| k as usize);
+    m.rho_inf = env("RHO");
+    if let Ok(name) = std::env::var("SOLVER") {
+        m.solver = Some(name.parse()?);
+    }
+    if let Some(tolerance) = env("CGTOL") {
+        m.solver = match m.solver.unwrap_or(LinearSolver::default_aggregation()) {
+            LinearSolver::TwoLevel { max_iterations, .. } => {
+                Some(LinearSolver::TwoLevel { tolerance, max_iterations })
+            }
+            LinearSolver::ConjugateGradient { max_iterations, .. } => {
+                Some(LinearSolver::ConjugateGradient { tolerance, max_iterations })
+            }
+            LinearSolver::RigidAggregation { max_iterations, .. } => {
+                Some(LinearSolver::RigidAggregation { tolerance, max_iterations })
+            }
+            other => Some(other),
+        };
+    }
+    let out = run_sheet(&spec, &m, 1.0);
+    let com = net.centre_of_mass(&out.x);
+    let p = out.profile.unwrap_or_default();
+    let steps = p.steps.max(1) as f64;
+    println!(
+        "{}: wall {:.3} s  {:.2} ms/step  CoM {:.2} mm  RMS {:.2} mm  newton/step {:.2}  cg/step {:.2}  asm {:.2} setup {:.2} solve {:.2} ms/step  fact {} {}",
+        m.label(),
+        out.wall_s,
+        out.wall_s * 1e3 / steps,
+        com.distance(com_ref) * 1e3,
+        rms(&out.x, &reference) * 1e3,
+        p.newton_iterations as f64 / steps,
+        p.solver_iterations as f64 / steps,
+        p.assembly_s * 1e3 / steps,
+        p.setup_s * 1e3 / steps,
+        p.solve_s * 1e3 / steps,
+        p.factorizations,
+        out.error.as_deref().unwrap_or("")
+    );
+    Ok(())
+}
+
 fn drapes_section() -> Result<(), Error> {
     let contact_in = ContactMode::InSolve;
     let after = ContactMode::AfterStep;
+    let alpha_60 = DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 60.0, contact_in);
     let methods = [
-        DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 60.0, contact_in),
+        alpha_60,
+        DrapeMethod { method: Method { rho_inf: Some(0.0), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod { method: Method { rho_inf: Some(0.4), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod { method: Method { newton: Some(8), ..alpha_60.method }, ..alpha_60 },
+        DrapeMethod {
+            method: Method { solver: Some(LinearSolver::SparseCholesky), ..alpha_60.method },
+            ..alpha_60
+        },
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 120.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 240.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 1000.0, contact_in),
@@ -659,6 +744,9 @@ fn main() -> Result<(), Error> {
     }
     if all || what == "breakdown" {
         breakdown_section();
+    }
+    if what == "probe" {
+        probe_section()?;
     }
     if all || what == "drapes" {
         drapes_section()?;

@@ -21,6 +21,12 @@ pub enum ContactMode {
 }
 
 impl ContactMode {
+    /// Whether this is the default, after the step: scene structs skip the field when writing it, so
+    /// that every scene file written before the switch existed is written the same.
+    pub fn is_after_step(&self) -> bool {
+        *self == ContactMode::AfterStep
+    }
+
     /// The name on the command line: `after-step` or `in-solve`.
     pub fn name(self) -> &'static str {
         match self {

@@ -420,6 +420,14 @@ impl Linearized<DVec3> for SpringNetwork {
         }
     }
 
+    /// The force of [`Linearized::force_and_system`] without the blocks.
+    fn force(&mut self, _t: f64, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], _scratch: &mut Jacobians<DVec3>) {
+        for (fi, m) in f.iter_mut().zip(&self.masses) {
+            *fi = self.gravity * *m;
+        }
+        self.add_spring_forces(x, v, f);
+    }
+
     fn prescribed(&self) -> &[bool] {
         &self.pinned
     }

@@ -40,7 +40,8 @@ pub enum Integrator {
     /// resolve set by its spectral radius ρ∞ (0 damps them in one step, 1 is the undamped implicit midpoint
     /// rule; default [`crate::DEFAULT_RHO_INF`], `Stepper::set_spectral_radius`), and barely any damping of
     /// the ones it resolves. Solved by Newton's method with a line search, by default with conjugate
-    /// gradients and the two-level preconditioner ([`crate::LinearSolver::TwoLevel`]); the one method that
+    /// gradients and the rigid-aggregation preconditioner ([`crate::LinearSolver::RigidAggregation`]); the
+    /// one method that
     /// can constrain contacts inside its solve (`Stepper::step_with_contacts`). The accurate choice for
     /// large steps.
     GeneralizedAlpha,

@@ -12,9 +12,11 @@
 //!   thesis's adaptive Euler, implicit (backward) Euler solved the Baraff–Witkin way (one Newton step,
 //!   exact Jacobians from a [`Linearized`] system) and BDF2, and generalised-α (Chung & Hulbert 1993:
 //!   second order, its damping of unresolved modes set by ρ∞, Newton's method with a safeguarding line
-//!   search). Their linear systems are solved by preconditioned conjugate gradients (block Jacobi, or a
+//!   search). Their linear systems are solved by preconditioned conjugate gradients (block Jacobi; a
 //!   two-level preconditioner that keeps one factorisation of a scalar mass-plus-spring matrix across
-//!   steps) or by faer's sparse Cholesky with its symbolic factorisation reused ([`LinearSolver`]).
+//!   steps; or one whose coarse level is the rigid motions of small patches, projected with the
+//!   current matrix, generalised-α's default) or by faer's sparse Cholesky with its symbolic
+//!   factorisation reused ([`LinearSolver`]).
 //! - [`contact`]: contacts with static surfaces constrained inside generalised-α's solve (normal
 //!   velocity, Coulomb friction sticking or sliding, release when pulling), through a [`contact::ContactModel`]
 //!   the caller implements with its geometry ([`Stepper::step_with_contacts`]).

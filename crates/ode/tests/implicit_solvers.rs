@@ -123,6 +123,48 @@ fn cholesky_and_conjugate_gradients_give_the_same_steps() {
     assert!(moved > 1e-2, "moved only {moved}");
 }
 
+/// The two preconditioned CG solvers that keep factorisations (the scalar two-level one, with its
+/// hand-written three-component triangular solve, and the rigid-aggregation one) converge to the steps
+/// of the direct solver when their tolerance is tight.
+#[test]
+fn two_level_and_aggregation_solves_give_the_cholesky_steps() {
+    let (n, steps, h) = (40, 30, 1.0 / 60.0);
+    let direct = run(LinearSolver::SparseCholesky, n, steps, h);
+    let scale = direct.x.iter().map(|p| p.length()).fold(0.0, f64::max);
+    for solver in [
+        LinearSolver::TwoLevel { tolerance: 1e-13, max_iterations: 10_000 },
+        LinearSolver::RigidAggregation { tolerance: 1e-13, max_iterations: 10_000 },
+    ] {
+        let it = run(solver, n, steps, h);
+        let worst = it.x.iter().zip(&direct.x).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+        assert!(worst <= 1e-9 * scale, "{}: positions differ by {worst:e} (scale {scale})", solver.name());
+        assert_eq!(it.v[0], DVec3::new(0.3, 0.0, 0.0), "{}: the pin's velocity", solver.name());
+    }
+}
+
+/// Generalised-α with the rigid-aggregation solve (its default) converges with its Newton iterations to
+/// the step the direct solver gives.
+#[test]
+fn generalized_alpha_with_aggregation_converges_to_the_direct_step() {
+    let (n, h) = (40, 1.0 / 60.0);
+    let step = |solver: LinearSolver| {
+        let mut chain = Chain::new(n);
+        let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
+        stepper.set_linear_solver(solver);
+        stepper.set_newton_iterations(12);
+        let (mut now, mut next) = (start(n), start(n));
+        for s in 0..10 {
+            stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
+            std::mem::swap(&mut now, &mut next);
+        }
+        now
+    };
+    let direct = step(LinearSolver::SparseCholesky);
+    let agg = step(LinearSolver::RigidAggregation { tolerance: 1e-12, max_iterations: 10_000 });
+    let worst = agg.x.iter().zip(&direct.x).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    assert!(worst < 1e-8, "positions differ by {worst:e}");
+}
+
 #[test]
 fn cholesky_keeps_a_prescribed_velocity_exactly() {
     let (n, steps, h) = (10, 20, 1.0 / 30.0);
@@ -204,8 +246,18 @@ fn solver_names_parse() {
     assert_eq!("cholesky".parse::<LinearSolver>(), Ok(LinearSolver::SparseCholesky));
     assert_eq!("cg".parse::<LinearSolver>(), Ok(LinearSolver::default_cg()));
     assert_eq!("two-level".parse::<LinearSolver>(), Ok(LinearSolver::default_two_level()));
-    assert!("lu".parse::<LinearSolver>().unwrap_err().contains("expected `cg`, `cholesky` or `two-level`"));
-    for s in [LinearSolver::SparseCholesky, LinearSolver::default_cg(), LinearSolver::default_two_level()] {
+    assert_eq!("aggregation".parse::<LinearSolver>(), Ok(LinearSolver::default_aggregation()));
+    assert!(
+        "lu".parse::<LinearSolver>()
+            .unwrap_err()
+            .contains("expected `cg`, `cholesky`, `two-level` or `aggregation`")
+    );
+    for s in [
+        LinearSolver::SparseCholesky,
+        LinearSolver::default_cg(),
+        LinearSolver::default_two_level(),
+        LinearSolver::default_aggregation(),
+    ] {
         assert_eq!(s.name().parse::<LinearSolver>(), Ok(s));
     }
 }
@@ -241,7 +293,7 @@ fn newton_iterations_converge_to_the_nonlinear_step() {
     assert!(r[4] < 1e-6 * r[0], "residuals after 1..5 Newton iterations: {r:?}");
 }
 
-/// A cloned generalised-α stepper (whose two-level preconditioner keeps a factorisation made steps ago)
+/// A cloned generalised-α stepper (whose preconditioner keeps a factorisation made before the clone)
 /// steps exactly as the original.
 #[test]
 fn a_cloned_generalized_alpha_stepper_steps_identically() {

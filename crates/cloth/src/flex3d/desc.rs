@@ -168,6 +168,7 @@ pub struct ModelOptions {
     /// (the default), or inside the implicit solve (`InSolve`, generalised-α only), inelastic, with
     /// Coulomb friction of the scene's `ATRITO` coefficient (sticking and sliding) and release when the
     /// contact would pull (an anima extension). Contacts between surfaces stay after the step either way.
+    #[serde(skip_serializing_if = "ContactMode::is_after_step")]
     pub object_contact: ContactMode,
 }
 

@@ -43,6 +43,8 @@ pub enum StepError {
 /// How many collision responses the run has applied, by partner kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct CollisionCounts {
+    /// With contacts in the solve (`ModelOptions::object_contact`), the particles constrained at the end
+    /// of each step, summed over the steps.
     pub with_objects: u64,
     pub with_surfaces: u64,
 }
@@ -270,6 +272,8 @@ pub struct Flex3dWorld {
     friction: f64,
     /// How far off a static surface the contacts in the solve keep a particle.
     contact_thickness: f64,
+    /// Per particle, whether this step's collision pass or constraints changed it after the integrator.
+    touched: Vec<bool>,
 }
 
 impl Flex3dWorld {
@@ -417,6 +421,7 @@ impl Flex3dWorld {
             friction: scene.friction.coefficient,
             contact_thickness: THICKNESS_OF_SPACING
                 * scene.surfaces.iter().map(|s| s.spacing_m).fold(f64::INFINITY, f64::min),
+            touched: vec![false; n],
         })
     }
 
@@ -487,17 +492,25 @@ impl Flex3dWorld {
             self.stepper.step(&mut self.model, t, self.dt, &self.now, &mut self.next).map(|_| ())
         };
         stepped.map_err(|source| StepError::Solver { step: self.step + 1, time: t, source })?;
+        self.touched.fill(false);
         let constraints_changed = self.apply_constraints();
-        let hits_before = self.counts;
+        if constraints_changed {
+            for pins in &self.pinned_of_surface {
+                for &p in pins {
+                    self.touched[p] = true;
+                }
+            }
+        }
         if self.options.collisions && self.colliders.corners.len() > self.colliders.n_static {
             self.collide(!in_solve);
         } else if self.options.collisions && !in_solve && !self.colliders.corners.is_empty() {
             self.collide(true);
         }
         // A multistep method's history no longer describes the motion after a velocity jump (spec
-        // S4.2.3: restart after any collision response or constraint discontinuity).
-        if constraints_changed || self.counts != hits_before {
-            self.stepper.reset_history();
+        // S4.2.3: restart after any collision response or constraint discontinuity); generalised-α forgets
+        // the acceleration of the particles the jump touched only.
+        if self.touched.contains(&true) {
+            self.stepper.reset_history_of(&self.touched);
         }
         std::mem::swap(&mut self.now, &mut self.next);
         self.step += 1;
@@ -540,7 +553,7 @@ impl Flex3dWorld {
     /// the particle stays where it was at the start of the step. Without `static_objects` only the
     /// surfaces' triangles are tested (the static ones are the implicit solve's).
     fn collide(&mut self, static_objects: bool) {
-        let Self { colliders, now, next, model, mass, options, counts, .. } = self;
+        let Self { colliders, now, next, model, mass, options, counts, touched, .. } = self;
         let (x, x_new, v_new) = (&now.x, &mut next.x, &mut next.v);
         #[cfg(test)]
         let brute_force = colliders.brute_force;
@@ -597,6 +610,7 @@ impl Flex3dWorld {
             }
             let Some((_, t, bary)) = best else { continue };
             let v_tilde = v_new[p];
+            touched[p] = true;
             if t < n_static {
                 v_new[p] = match options.static_response {
                     StaticResponse::Reverse => -v_tilde,
@@ -625,6 +639,7 @@ impl Flex3dWorld {
                             let (vp, vq) = elastic_1d(mass[p], v_tilde, mass[q], v_new[q]);
                             v_new[p] = vp;
                             v_new[q] = vq;
+                            touched[q] = true;
                         }
                     }
                     ContactApproach::ThreeVertices => {
@@ -637,6 +652,7 @@ impl Flex3dWorld {
                             v_new[p] = vp;
                             for q in tri {
                                 v_new[q] += vb - mean;
+                                touched[q] = true;
                             }
                         }
                     }

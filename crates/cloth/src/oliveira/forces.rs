@@ -104,6 +104,10 @@ impl Linearized<DVec3> for ClothModel {
         &self.implicit.pattern
     }
 
+    fn force(&mut self, _t: f64, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], _scratch: &mut Jacobians<DVec3>) {
+        self.forces(x, v, f);
+    }
+
     fn force_and_jacobians(
         &mut self,
         _t: f64,

@@ -210,7 +210,8 @@ pub struct Options {
     /// velocity constrained, Coulomb friction with μ the mean of the cloth's and the object's (Eq. 4.17)
     /// for both sticking and sliding, restitution γ on impact, release when the contact would pull; the
     /// switches above that shape the split's response (`contact_velocity`, `separating`,
-    /// `recheck_corrected_path`, `edge_contacts`) do not apply to it.
+    /// `recheck_corrected_path`, `edge_contacts`) do not apply to it. Not written when it is the default.
+    #[serde(skip_serializing_if = "ContactMode::is_after_step")]
     pub contact: ContactMode,
 }
 

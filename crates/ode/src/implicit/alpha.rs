@@ -56,11 +56,24 @@ use super::workspace::ImplicitWorkspace;
 pub const DEFAULT_RHO_INF: f64 = 0.2;
 
 /// Newton iterations per step when none is set (the planned ones; up to two more run while contacts
-/// change regime). Measured on the standard sheet at 1/60 s with the default solver (two-level CG to a
-/// relative residual of 0.1 per iteration): 3 iterations err 21 mm at the centre of mass, 4 err 6 mm,
-/// converged 8 mm (the differences below 10 mm are noise of a folding sheet); with exact solves one
-/// iteration, linearised at the predicted state, errs 490 mm and two 12 mm (ρ∞ = 0.4).
-pub const DEFAULT_NEWTON_ITERATIONS: usize = 4;
+/// change regime). Measured on the standard sheet (N = 64, 1 s at 1/60 s) with the default solver
+/// (rigid-aggregation CG to a relative residual of 0.1 per iteration; `cargo run --release -p
+/// anima-cloth --example large_steps -- probe`, with `NEWTON=k`): 2 iterations err 6.5 mm at the centre
+/// of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms per step, 3 iterations 13 mm
+/// (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very stiff sheet of the hard
+/// cases (k = 10⁵ N/m, `implicit_hard_cases`): its largest strain reaches 11.6 % with two (7.8 % with
+/// three; a looser relative residual of 0.2 with three let it swing up to 23 m/s). With exact solves
+/// one iteration, linearised at the predicted state, errs 490 mm and two 12 mm (ρ∞ = 0.4). The centre
+/// of mass of a folding sheet moves chaotically with small changes: the RMS error is the steadier
+/// measure, and differences in the centre of mass below 10 mm are noise.
+///
+/// Predicting the end velocity from earlier steps instead of w = v₀ (constant acceleration, the last
+/// step's velocity change, linear or quadratic extrapolation of the positions) was measured worse
+/// with every Newton count: the method's acceleration and velocity carry the unconverged residue of
+/// the stiff springs, and extrapolating it starts Newton far from the solution (metres of error with
+/// inexact solves). Stopping Newton on a residual ratio instead of a count did not pay either: the
+/// ratio after two iterations is spread alike on the standard sheet and on the stiff one.
+pub const DEFAULT_NEWTON_ITERATIONS: usize = 3;
 
 /// The method's parameters for a spectral radius ρ∞ (clamped to [0, 1]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -153,7 +166,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         ws.newton_iterations = DEFAULT_NEWTON_ITERATIONS;
         #[cfg(feature = "sparse-cholesky")]
         {
-            ws.solver = super::LinearSolver::default_two_level();
+            ws.solver = super::LinearSolver::default_aggregation();
         }
         ws
     }
@@ -204,7 +217,12 @@ impl<C: Coord> ImplicitWorkspace<C> {
         } else {
             self.contact.slots.clear();
         }
-        self.evaluate(lin, &c, t, now, next);
+        self.evaluate(lin, &c, t, now, next, true);
+        // The rigid-aggregation preconditioner takes its patches' rotations about the predicted end
+        // positions and builds its coarse matrix at the step's first solve.
+        self.coarse_stale = true;
+        self.positions.clear();
+        self.positions.extend_from_slice(&next.x);
         let mut merit = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
         let mut iterations = 0;
         let mut evaluations = 1;
@@ -284,11 +302,14 @@ impl<C: Coord> ImplicitWorkspace<C> {
             self.trial.copy_from_slice(&next.v);
             let mut step = 1.0;
             let halvings = if regimes_changed { 0 } else { MAX_HALVINGS };
+            // After the last planned iteration without contacts no solve follows: the trial point needs
+            // its residual only, not a new matrix.
+            let with_matrix = contacts.is_some() || newton < self.newton_iterations;
             for attempt in 0..=halvings {
                 for i in 0..n {
                     next.v[i] = self.trial[i] + self.delta[i] * step;
                 }
-                self.evaluate(lin, &c, t, now, next);
+                self.evaluate(lin, &c, t, now, next, with_matrix);
                 evaluations += 1;
                 let trial = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
                 if trial <= GROWTH_ALLOWED * merit || attempt == halvings {
@@ -373,6 +394,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         t: f64,
         now: &State<C>,
         next: &mut State<C>,
+        with_matrix: bool,
     ) {
         let started = self.profile.is_some().then(Instant::now);
         let n = now.len();
@@ -391,19 +413,25 @@ impl<C: Coord> ImplicitWorkspace<C> {
             self.xk[i] = now.x[i] * alpha_f + x1 * (1.0 - alpha_f);
             self.w[i] = now.v[i] * alpha_f + w * (1.0 - alpha_f);
         }
-        lin.force_and_system(
-            t + (1.0 - alpha_f) * h,
-            &self.xk,
-            &self.w,
-            c.beta_v,
-            c.beta_x,
-            &mut self.f,
-            &mut self.a.diag,
-            &mut self.a.off,
-            &mut self.jac,
-        );
-        let (masses, prescribed) = (lin.masses(), lin.prescribed());
-        self.a.add_masses(masses);
+        let t_star = t + (1.0 - alpha_f) * h;
+        if with_matrix {
+            lin.force_and_system(
+                t_star,
+                &self.xk,
+                &self.w,
+                c.beta_v,
+                c.beta_x,
+                &mut self.f,
+                &mut self.a.diag,
+                &mut self.a.off,
+                &mut self.jac,
+            );
+            self.a.add_masses(lin.masses());
+        } else {
+            lin.force(t_star, &self.xk, &self.w, &mut self.f, &mut self.jac);
+        }
+        let masses = lin.masses();
+        let prescribed = lin.prescribed();
         let a0 = &self.alpha.as_ref().expect("present").a;
         for i in 0..n {
             self.b[i] = if prescribed[i] {

@@ -39,6 +39,12 @@ impl<C: Coord> ImplicitWorkspace<C> {
         let n_pairs = lin.pattern().len();
         self.jac.resize(n, n_pairs);
         self.a.resize(n, n_pairs);
+        #[cfg(feature = "sparse-cholesky")]
+        if matches!(self.solver, super::LinearSolver::RigidAggregation { .. }) {
+            self.coarse_stale = true;
+            self.positions.clear();
+            self.positions.extend_from_slice(&now.x);
+        }
         // BDF2 when the last step had the same size; backward Euler otherwise.
         let bdf2 = self.bdf2.is_some() && self.prev_h == h;
         let beta = if bdf2 { 2.0 * h / 3.0 } else { h };

@@ -53,6 +53,13 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     pub(super) direct: super::cholesky::DirectCache,
     #[cfg(feature = "sparse-cholesky")]
     pub(super) two_level: Option<super::two_level::TwoLevel<C>>,
+    #[cfg(feature = "sparse-cholesky")]
+    pub(super) aggregation: Option<super::aggregation::RigidAggregation<C>>,
+    /// The positions the rigid-aggregation preconditioner takes its patches' rigid motions about (set
+    /// by the step before its first solve), and whether its coarse matrix is to be rebuilt at the next
+    /// solve (at the first solve of every step).
+    pub(super) positions: Vec<C>,
+    pub(super) coarse_stale: bool,
     /// BDF2 only: the state one step back, and the step that led from it (0 when there is none).
     pub(super) bdf2: Option<State<C>>,
     pub(super) prev_h: f64,
@@ -87,6 +94,10 @@ impl<C: Coord> ImplicitWorkspace<C> {
             direct: Default::default(),
             #[cfg(feature = "sparse-cholesky")]
             two_level: None,
+            #[cfg(feature = "sparse-cholesky")]
+            aggregation: None,
+            positions: Vec::new(),
+            coarse_stale: true,
             bdf2: bdf2.then(|| State::zeros(n)),
             prev_h: 0.0,
             w: zeros(),
@@ -174,6 +185,43 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     pattern,
                     filter,
                     two_level,
+                    &self.b,
+                    &mut self.dv,
+                    &mut self.cg,
+                    tolerance,
+                    max_iterations,
+                );
+                if let (Some(p), Some(d)) = (&mut self.profile, setup_done) {
+                    p.solve_s += d.elapsed().as_secs_f64();
+                    p.solver_iterations += outcome.iterations;
+                }
+                return finish(outcome, strict);
+            }
+            #[cfg(feature = "sparse-cholesky")]
+            LinearSolver::RigidAggregation { tolerance, max_iterations } => {
+                let agg = self.aggregation.get_or_insert_with(Default::default);
+                if self.positions.len() != masses.len() {
+                    // No positions given: the rotations turn about the origin, which still spans them.
+                    self.positions.clear();
+                    self.positions.resize(masses.len(), C::default());
+                }
+                if self.coarse_stale || !agg.is_built() {
+                    agg.update(&self.a, pattern, masses, prescribed, &self.positions)
+                        .map_err(OdeError::Factorization)?;
+                    self.coarse_stale = false;
+                    if let Some(p) = &mut self.profile {
+                        p.factorizations += 1;
+                    }
+                }
+                let setup_done = self.profile.is_some().then(Instant::now);
+                if let (Some(p), Some(s), Some(d)) = (&mut self.profile, started, setup_done) {
+                    p.setup_s += (d - s).as_secs_f64();
+                }
+                let outcome = pcg(
+                    &self.a,
+                    pattern,
+                    filter,
+                    agg,
                     &self.b,
                     &mut self.dv,
                     &mut self.cg,
