@@ -113,9 +113,11 @@ enum SolverArg {
     Cg,
     /// faer's sparse Cholesky: exact whatever the stiffness.
     Cholesky,
-    /// Conjugate gradients with a factorised two-level preconditioner kept across steps (generalised-α's
-    /// default).
+    /// Conjugate gradients with a factorised two-level preconditioner kept across steps.
     TwoLevel,
+    /// Conjugate gradients preconditioned by the rigid motions of small patches (generalised-α's
+    /// default).
+    Aggregation,
 }
 
 /// Where contact with static objects is answered.
@@ -340,6 +342,7 @@ impl RunArgs {
                     SolverArg::Cg => LinearSolver::default_cg(),
                     SolverArg::Cholesky => LinearSolver::SparseCholesky,
                     SolverArg::TwoLevel => LinearSolver::default_two_level(),
+                    SolverArg::Aggregation => LinearSolver::default_aggregation(),
                 }),
                 rho_inf: self.rho_inf,
                 newton_iterations: self.newton_iterations.map(|k| k as usize),

@@ -103,7 +103,7 @@ fn read_points(path: &Path, head: usize) -> Option<(Vec<f64>, Vec<DVec3>)> {
     let bytes = std::fs::read(path).ok()?;
     let vals: Vec<f64> =
         bytes.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
-    if vals.len() < head || (vals.len() - head) % 3 != 0 {
+    if vals.len() < head || !(vals.len() - head).is_multiple_of(3) {
         return None;
     }
     let points = vals[head..].chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect();

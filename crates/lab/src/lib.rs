@@ -10,7 +10,7 @@
 //! - [`flex3d`], [`oliveira`], [`nunes`]: the experiments of the three theses (Nedel 1993's E-1…E-8,
 //!   Oliveira 2013's Tests I–III on static, implicit and adaptive meshes, Nunes 2006's walker, thrower
 //!   and backflip), their evaluators and objectives, the reports that set our numbers beside the
-//!   theses', and the figures; [`bench`]: speed against error for every integrator.
+//!   theses', and the figures; [`bench`](mod@bench): speed against error for every integrator.
 //! - [`report`]: reports as documents of named sections, so a partial run updates its own sections;
 //!   [`repo`]: where assets are read and reports, figures and caches are written.
 //!

@@ -161,7 +161,7 @@ pub struct ModelOptions {
     pub row_direction: RowDirection,
     pub translation: TranslationMode,
     /// Limit friction so that on its own it cannot reverse a velocity within one step:
-    /// |F_friction|·Δt/m ≤ |v| (spec S3.7 [EXT]). Off in the thesis; large steps need it, or friction
+    /// |F_friction|·Δt/m ≤ |v| (spec S3.7 \[EXT\]). Off in the thesis; large steps need it, or friction
     /// makes a resting particle chatter.
     pub friction_clamp: bool,
     /// Where contact with static objects is answered: after the step by the thesis's elastic impact

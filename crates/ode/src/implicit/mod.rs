@@ -140,7 +140,7 @@ pub enum LinearSolver {
     /// the numeric one is redone at every Newton iteration.
     #[cfg(feature = "sparse-cholesky")]
     SparseCholesky,
-    /// Conjugate gradients with the two-level preconditioner of [`two_level`]: block-Jacobi smoothing
+    /// Conjugate gradients with the two-level preconditioner (module `implicit::two_level`): block-Jacobi smoothing
     /// on the exact system and a global correction by a scalar "mass plus spring Laplacian" matrix,
     /// factorised once and kept across Newton iterations and steps (refreshed only when the step or the
     /// stiffness changes), to a relative residual `tolerance`.
