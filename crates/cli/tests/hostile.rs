@@ -231,6 +231,29 @@ fn a_run_keeps_its_outputs_whole_and_its_own() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A run that overflows is stopped with exit status 2, with the step, and its summary says it: the
+/// implicit integrators too, whose overflowing force once left a frozen, finite state (`all_finite: true`).
+#[test]
+fn a_diverging_run_says_so_with_every_integrator() {
+    let dir = temp_dir("diverge");
+    let p = edited(
+        &dir,
+        "scenes/standard-sheet-32.ron",
+        "gravity_m_s2: (0.0, 0.0, -9.81)",
+        "gravity_m_s2: (0.0, 0.0, -1e200)",
+        "overflow.ron",
+    );
+    for integrator in ["symplectic-euler", "implicit-euler", "bdf2", "generalized-alpha"] {
+        let o = run(&dir, &p, &["--integrator", integrator, "--dt", "0.01", "--duration", "0.1"]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{integrator}: {err}");
+        assert!(err.contains("step "), "{integrator}: the error names the step: {err}");
+        let summary = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
+        assert!(summary.contains("\"all_finite\": false"), "{integrator}: {summary}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn exit_statuses_are_documented() {
     let help = String::from_utf8_lossy(&anima().arg("--help").output().unwrap().stdout).into_owned();

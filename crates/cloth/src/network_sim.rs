@@ -325,3 +325,14 @@ pub enum RunError {
     #[error("step {step}: {source}")]
     Solver { step: usize, source: OdeError },
 }
+
+impl RunError {
+    /// Whether the run went non-finite: in its state, or in the linear system of an implicit step
+    /// (which refuses the step and leaves the state as it was).
+    pub fn is_non_finite(&self) -> bool {
+        matches!(
+            self,
+            RunError::NonFinite { .. } | RunError::Solver { source: OdeError::NonFiniteSystem, .. }
+        )
+    }
+}

@@ -71,6 +71,8 @@ pub enum OdeError {
     Factorization(String),
     #[error("{0} cannot constrain contacts inside its step; generalized-alpha can")]
     ContactsUnsupported(Integrator),
+    #[error("the linear system of an implicit step holds a non-finite value (a force overflowed)")]
+    NonFiniteSystem,
 }
 
 /// Butcher tableau of an explicit Runge–Kutta method; `e` holds b − b̂ for an embedded error estimate.

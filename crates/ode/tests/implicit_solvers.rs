@@ -10,6 +10,7 @@ struct Chain {
     rest: f64,
     k: f64,
     c: f64,
+    gravity: f64,
     masses: Vec<f64>,
     prescribed: Vec<bool>,
     pattern: Vec<(u32, u32)>,
@@ -21,7 +22,7 @@ impl Chain {
         let mut prescribed = vec![false; n];
         prescribed[0] = true;
         let pattern = (0..n as u32 - 1).map(|i| (i, i + 1)).collect();
-        Self { rest: 0.1, k: 500.0, c: 0.2, masses, prescribed, pattern }
+        Self { rest: 0.1, k: 500.0, c: 0.2, gravity: 9.81, masses, prescribed, pattern }
     }
 }
 
@@ -44,7 +45,7 @@ impl Linearized<DVec3> for Chain {
         jac: &mut Jacobians<DVec3>,
     ) {
         for (fi, &m) in f.iter_mut().zip(&self.masses) {
-            *fi = DVec3::new(0.0, -9.81 * m, 0.0);
+            *fi = DVec3::new(0.0, -self.gravity * m, 0.0);
         }
         for (e, &(i, j)) in self.pattern.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
@@ -316,4 +317,55 @@ fn a_cloned_generalized_alpha_stepper_steps_identically() {
         std::mem::swap(&mut b, &mut b_next);
     }
     assert_eq!(a, b);
+}
+
+/// Under a gravity of 1e200 the pinned chain's springs overflow after one step (a length of 1e196
+/// squares to infinity) and the force turns NaN. Every implicit integrator with every solver must say so
+/// at that step, not return a frozen, finite state: before the check, CG's NaN residual compared false
+/// with its tolerance and the step came back with δ = 0.
+#[test]
+fn an_overflowing_force_is_an_error_not_a_frozen_state() {
+    let solvers = [
+        LinearSolver::default_cg(),
+        LinearSolver::SparseCholesky,
+        LinearSolver::default_two_level(),
+        LinearSolver::default_aggregation(),
+    ];
+    for integrator in [Integrator::ImplicitEuler, Integrator::Bdf2, Integrator::GeneralizedAlpha] {
+        for solver in solvers {
+            let n = 8;
+            let mut chain = Chain::new(n);
+            chain.gravity = 1e200;
+            let mut stepper = Stepper::new(integrator, n);
+            stepper.set_linear_solver(solver);
+            let mut now = start(n);
+            let mut next = now.clone();
+            let mut failed_at = None;
+            for s in 0..10 {
+                match stepper.step(&mut chain, s as f64 * 0.01, 0.01, &now, &mut next) {
+                    Ok(_) if next.first_non_finite().is_some() => {
+                        failed_at = Some(s);
+                        break;
+                    }
+                    Ok(_) => std::mem::swap(&mut now, &mut next),
+                    Err(e) => {
+                        assert!(
+                            matches!(e, anima_ode::OdeError::NonFiniteSystem),
+                            "{integrator} with {}: {e}",
+                            solver.name()
+                        );
+                        failed_at = Some(s);
+                        break;
+                    }
+                }
+            }
+            let failed_at = failed_at.unwrap_or_else(|| {
+                panic!(
+                    "{integrator} with {} ran 10 steps under 1e200 gravity and said nothing",
+                    solver.name()
+                )
+            });
+            assert!(failed_at <= 2, "{integrator} with {}: noticed only at step {failed_at}", solver.name());
+        }
+    }
 }

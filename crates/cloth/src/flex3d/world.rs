@@ -40,6 +40,17 @@ pub enum StepError {
     Solver { step: usize, time: f64, source: anima_ode::OdeError },
 }
 
+impl StepError {
+    /// Whether the run went non-finite: in its state, or in the linear system of an implicit step
+    /// (which refuses the step and leaves the state as it was).
+    pub fn is_non_finite(&self) -> bool {
+        matches!(
+            self,
+            StepError::NonFinite(_) | StepError::Solver { source: anima_ode::OdeError::NonFiniteSystem, .. }
+        )
+    }
+}
+
 /// How many collision responses the run has applied, by partner kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct CollisionCounts {

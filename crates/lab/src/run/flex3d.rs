@@ -145,7 +145,7 @@ pub fn run(
         frames: frames_done,
         simulated_seconds: world.time(),
         wall_seconds,
-        all_finite: !matches!(failure, Some(StepError::NonFinite(_))) && d.all_finite,
+        all_finite: !failure.as_ref().is_some_and(StepError::is_non_finite) && d.all_finite,
         error: failure.as_ref().map(|e| e.to_string()),
         warnings,
         detail: Detail::Flex3d(Flex3dDetail {

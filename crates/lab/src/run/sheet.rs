@@ -76,6 +76,7 @@ pub fn run(
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
+    let mut diverged = false;
     let mut frames = 0;
     if scene.integrator.is_adaptive() {
         // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
@@ -107,6 +108,7 @@ pub fn run(
                 ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
             };
             if let Err(e) = sim.run(target.saturating_sub(sim.steps_taken())) {
+                diverged = e.is_non_finite();
                 error = Some(e.to_string());
                 break;
             }
@@ -133,7 +135,7 @@ pub fn run(
         frames,
         simulated_seconds: sim.time(),
         wall_seconds,
-        all_finite: sim.state.first_non_finite().is_none(),
+        all_finite: !diverged && sim.state.first_non_finite().is_none(),
         error,
         warnings,
         detail: Detail::Sheet(SheetDetail {

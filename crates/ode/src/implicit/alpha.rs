@@ -223,6 +223,11 @@ impl<C: Coord> ImplicitWorkspace<C> {
         self.coarse_stale = true;
         self.positions.clear();
         self.positions.extend_from_slice(&next.x);
+        // A force that overflowed at the predictor: the merit would be NaN, no Newton iteration would
+        // run, and the step would end at the predictor, finite and wrong.
+        if !self.b.iter().all(|b| b.is_finite()) {
+            return Err(OdeError::NonFiniteSystem);
+        }
         let mut merit = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
         let mut iterations = 0;
         let mut evaluations = 1;
@@ -312,7 +317,11 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 self.evaluate(lin, &c, t, now, next, with_matrix);
                 evaluations += 1;
                 let trial = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
-                if trial <= GROWTH_ALLOWED * merit || attempt == halvings {
+                let finite = self.b.iter().all(|b| b.is_finite());
+                if !finite && attempt == halvings {
+                    return Err(OdeError::NonFiniteSystem);
+                }
+                if finite && (trial <= GROWTH_ALLOWED * merit || attempt == halvings) {
                     merit = trial;
                     break;
                 }

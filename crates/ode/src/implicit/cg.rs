@@ -42,6 +42,8 @@ pub(crate) struct CgBuffers<C> {
     z: Vec<C>,
     p: Vec<C>,
     q: Vec<C>,
+    /// b scaled down when ‖b‖² overflows.
+    scaled_b: Vec<C>,
 }
 
 /// How a solve ended.
@@ -77,6 +79,22 @@ pub(crate) fn pcg<C: Coord>(
         v.resize(n, C::default());
     }
     let b_norm2 = dot(b, b);
+    if b_norm2.is_infinite() {
+        // ‖b‖² overflows while b is finite (forces beyond 1e154): every residual would compare as
+        // converged with an infinite target and the solve would return x₀. CG is linear, so solve for
+        // b/s and x/s instead, with s the largest component of b.
+        let s = b.iter().map(|c| c.max_abs()).fold(0.0, f64::max);
+        if s.is_finite() {
+            let mut scaled = std::mem::take(&mut buf.scaled_b);
+            scaled.clear();
+            scaled.extend(b.iter().map(|&c| c * (1.0 / s)));
+            x.iter_mut().for_each(|c| *c = *c * (1.0 / s));
+            let outcome = pcg(a, pattern, filter, precond, &scaled, x, buf, tol, max_iter);
+            x.iter_mut().for_each(|c| *c = *c * s);
+            buf.scaled_b = scaled;
+            return outcome;
+        }
+    }
     if b_norm2 == 0.0 {
         x.fill(C::default());
         return CgOutcome { iterations: 0, relative_residual: 0.0, converged: true };

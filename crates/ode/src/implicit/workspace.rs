@@ -123,12 +123,33 @@ impl<C: Coord> ImplicitWorkspace<C> {
     /// Solves A δ = b (both filtered) into `self.dv` with the chosen solver, starting CG from the δ
     /// already there. Returns the solver's iterations (0 for the direct one). With `strict`, CG that
     /// stops short of its tolerance is an error (backward Euler's and BDF2's contract); otherwise the
-    /// last iterate is used, which is what an inexact Newton iteration wants.
+    /// last iterate is used, which is what an inexact Newton iteration wants. A non-finite right-hand
+    /// side or solution is an error ([`OdeError::NonFiniteSystem`]).
+    pub(super) fn solve(
+        &mut self,
+        pattern: &[(u32, u32)],
+        filter: Filter<'_, C>,
+        masses: &[f64],
+        prescribed: &[bool],
+        strict: bool,
+    ) -> Result<usize, OdeError> {
+        // A force or a stiffness that overflowed would otherwise pass silently: CG's residual turns NaN,
+        // every comparison with it is false, and the step returns δ = 0, a state frozen but finite.
+        if !self.b.iter().all(|b| b.is_finite()) {
+            return Err(OdeError::NonFiniteSystem);
+        }
+        let iterations = self.solve_finite(pattern, filter, masses, prescribed, strict)?;
+        if !self.dv.iter().all(|d| d.is_finite()) {
+            return Err(OdeError::NonFiniteSystem);
+        }
+        Ok(iterations)
+    }
+
     #[cfg_attr(
         not(feature = "sparse-cholesky"),
         expect(unused_variables, reason = "the masses and the prescribed set serve the sparse solvers only")
     )]
-    pub(super) fn solve(
+    fn solve_finite(
         &mut self,
         pattern: &[(u32, u32)],
         filter: Filter<'_, C>,
