@@ -179,6 +179,34 @@ mod tests {
     }
 
     #[test]
+    fn updates_after_warm_up_allocate_nothing() {
+        // Warm up on the step with the most pairs (thick), then steps with fewer must reuse every
+        // buffer: same addresses, same capacities.
+        let mesh = MaterialMesh::grid(9, 1.0, DiagonalPattern::Alternating).unwrap();
+        let x = mesh.place(DVec3::ZERO, DVec3::X, DVec3::Y);
+        let wavy: Vec<DVec3> = x.iter().map(|p| *p + DVec3::Z * (5.0 * p.x).sin() * 0.01).collect();
+        let mut broad = SelfContactBroadPhase::new();
+        broad.update(mesh.triangles(), &x, &wavy, 0.3);
+        let fingerprint = |b: &SelfContactBroadPhase| {
+            [
+                (b.triangles.as_ptr() as usize, b.triangles.capacity()),
+                (b.edges.as_ptr() as usize, b.edges.capacity()),
+                (b.stack.as_ptr() as usize, b.stack.capacity()),
+                (b.vertex_triangle.as_ptr() as usize, b.vertex_triangle.capacity()),
+                (b.edge_edge.as_ptr() as usize, b.edge_edge.capacity()),
+                (b.triangle_tree.boxes.as_ptr() as usize, b.triangle_tree.boxes.capacity()),
+                (b.edge_tree.boxes.as_ptr() as usize, b.edge_tree.boxes.capacity()),
+            ]
+        };
+        let warm = fingerprint(&broad);
+        for step in 0..5 {
+            broad.update(mesh.triangles(), &wavy, &x, 0.01 * step as f64);
+            assert_eq!(fingerprint(&broad), warm, "step {step}");
+            broad.request_rebuild();
+        }
+    }
+
+    #[test]
     fn distant_layers_give_no_pairs_and_close_ones_do() {
         // Two separate flat sheets 0.1 apart; thickness decides whether they are candidates.
         let mesh = MaterialMesh::grid(5, 1.0, DiagonalPattern::Uniform).unwrap();

@@ -45,7 +45,8 @@ const MAX_ADVANCES: usize = 256;
 /// The first contact of a moving vertex with a moving triangle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VertexTriangleImpact {
-    /// Fraction of the step, in [0, 1], at which the contact happens.
+    /// Fraction of the step, in [0, 1], at which the contact happens: the instant the four points
+    /// become coplanar, or, for motion coplanar throughout, the first instant within the thickness.
     pub t: f64,
     /// Unit contact normal at time t, pointing from the triangle to the vertex's side (the gap
     /// direction when they are apart, the face normal on the side the vertex came from when they
@@ -60,7 +61,8 @@ pub struct VertexTriangleImpact {
 /// The first contact of two moving edges a₀a₁ and b₀b₁.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EdgeEdgeImpact {
-    /// Fraction of the step, in [0, 1], at which the contact happens.
+    /// Fraction of the step, in [0, 1], at which the contact happens (as for
+    /// [`VertexTriangleImpact::t`]).
     pub t: f64,
     /// Unit contact normal at time t, pointing from edge b to edge a's side (as for
     /// [`VertexTriangleImpact::normal`]): an impulse along +normal on a (and −normal on b) separates
@@ -447,8 +449,8 @@ mod tests {
         let hit_top = vertex_triangle_impact(s, e, 1.0e-4).unwrap();
         let (s, e) = vt(p, big, big);
         let hit_bottom = vertex_triangle_impact(s, e, 1.0e-4).unwrap();
-        assert!(close(hit_top.t, (0.2 - 1.0e-3 - 1.0e-4) / travel, 1e-3), "{hit_top:?}");
-        assert!(hit_top.t < hit_bottom.t && close(hit_bottom.t, 0.2 / travel, 1e-3), "{hit_bottom:?}");
+        assert!(close(hit_top.t, (0.2 - 1.0e-3) / travel, 1e-12), "{hit_top:?}");
+        assert!(hit_top.t < hit_bottom.t && close(hit_bottom.t, 0.2 / travel, 1e-12), "{hit_bottom:?}");
     }
 
     #[test]
