@@ -1,9 +1,10 @@
 //! The self-intersection checker: how many (edge, triangle) pairs of a triangle mesh cross.
 //!
 //! It is independent of any collision response, so tests and run summaries can use it to judge one
-//! (`self_intersections` in a run summary). A cloth that passes through itself has at least one
-//! edge piercing a triangle along every line where two sheets cross, so a count of 0 is the claim
-//! "never passes through itself", and a positive count measures how much it does.
+//! (the field `self_intersections` of a run summary is meant to be this count). A cloth that passes
+//! through itself has at least one edge piercing a triangle along every line where two sheets cross,
+//! so a count of 0 is the claim "never passes through itself", and a positive count measures how much
+//! it does.
 //!
 //! Conventions, chosen so that the count is a property of the geometry and not of rounding:
 //! * each undirected edge is counted once, however many triangles share it;

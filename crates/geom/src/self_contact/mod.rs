@@ -2,9 +2,9 @@
 //! (issue #16), and the checker that tells whether it did.
 //!
 //! * [`count_self_intersections`] / [`self_intersections`] — how many (edge, triangle) pairs of a
-//!   mesh cross. Independent of any response, so it can judge one; a run summary reports it as
-//!   `self_intersections`. Certified orientation signs ([`orient3d`]) make the count a property of
-//!   the geometry, not of rounding.
+//!   mesh cross. Independent of any response, so it can judge one; meant to be reported in run
+//!   summaries as `self_intersections`. Certified orientation signs ([`orient3d`]) make the count a
+//!   property of the geometry, not of rounding.
 //! * [`SelfContactBroadPhase`] — the vertex–triangle and edge–edge pairs whose boxes, swept over a
 //!   step and grown by the cloth's thickness, overlap: bounding-volume hierarchies refitted each step
 //!   and rebuilt when the topology changes, with every buffer kept, so a step allocates nothing.
