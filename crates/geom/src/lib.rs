@@ -34,6 +34,7 @@ mod obj_read;
 pub mod obt;
 pub mod query;
 pub mod remesh;
+pub mod self_contact;
 mod shapes;
 
 pub use glam::{DVec2, DVec3};
@@ -44,4 +45,13 @@ pub use intersect::{Aabb, PreparedTriangle, SegmentHit, segment_triangle};
 pub use mesh::{MeshError, TriangleMesh};
 pub use obj_read::{ObjError, read_obj};
 pub use query::{Cylinder, HalfSpace, MeshSolid, Proximity, Solid, SolidError, Sphere, SurfaceHit};
+/// Self-contact of a cloth with itself: the crossing checker tests and run summaries use to judge any
+/// response (a count of 0 is "never passed through itself"), and the detection a response is built on
+/// (swept broad phase, proximity, continuous time of impact). Re-exported at the root because the cloth
+/// crate and the run summaries need nothing else from the module.
+pub use self_contact::{
+    EdgeEdgeImpact, EdgeEdgePair, EdgeTriangleCrossing, SelfContactBroadPhase, VertexTriangleImpact,
+    VertexTrianglePair, count_self_intersections, edge_edge_impact, self_intersections,
+    vertex_triangle_impact,
+};
 pub use shapes::box_mesh;
