@@ -461,6 +461,9 @@ fn describe(scene: &Scene) -> String {
 /// The summary's main numbers on standard error.
 fn report(s: &Summary) {
     eprintln!("anima: {} steps, {} frames in {:.2} s", s.steps, s.frames, s.wall_seconds);
+    if let Some(n) = s.self_intersections {
+        eprintln!("anima: self-intersections: {n} crossing edge–triangle pairs at the worst frame");
+    }
     match &s.detail {
         Detail::Flex3d(d) => eprintln!(
             "anima: {:.0} ns per particle-step; max speed {:.4}, penetrations {}",

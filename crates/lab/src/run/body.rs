@@ -335,6 +335,7 @@ fn run_figures<F: Figures>(
         all_finite,
         error,
         warnings: Vec::new(),
+        self_intersections: None,
         detail: Detail::Body(BodyDetail {
             dt: settings.dt,
             substeps: settings.substeps,

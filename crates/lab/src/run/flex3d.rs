@@ -9,7 +9,7 @@ use anima_scene::LoadedFlex3d;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
+use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 
 /// Per-frame measurements (spec F-37).
@@ -112,6 +112,13 @@ pub fn run(
     let start = Instant::now();
     let mut failure = None;
     let mut frames_done = 0;
+    // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
+    let triangles: Vec<[u32; 3]> = world
+        .surfaces()
+        .iter()
+        .flat_map(|info| info.triangles.iter().map(|t| t.map(|i| i + info.offset as u32)))
+        .collect();
+    let mut watch = CrossingWatch::default();
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target, progress) {
@@ -119,6 +126,7 @@ pub fn run(
             break;
         }
         write_frame(opts, &world, k)?;
+        watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
         frame_stats.push(FrameStats {
             frame: k,
@@ -133,8 +141,9 @@ pub fn run(
         }
         frames_done = k;
     }
-    let wall_seconds = start.elapsed().as_secs_f64();
+    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     progress.end();
+    watch.look(world.positions(), &triangles);
     let d = world.diagnostics();
     let counts = world.collision_counts();
     let steps = world.steps_taken();
@@ -148,6 +157,7 @@ pub fn run(
         all_finite: !failure.as_ref().is_some_and(StepError::is_non_finite) && d.all_finite,
         error: failure.as_ref().map(|e| e.to_string()),
         warnings,
+        self_intersections: Some(watch.largest),
         detail: Detail::Flex3d(Flex3dDetail {
             integrator: scene.integrator.name().to_owned(),
             dt: scene.dt_s,

@@ -123,8 +123,34 @@ pub struct Summary {
     /// Why the run stopped early, if it did.
     pub error: Option<String>,
     pub warnings: Vec<String>,
+    /// Cloth scenes: the most crossing (edge, triangle) pairs of the cloth with itself — and, with
+    /// several FLEX3D surfaces, with one another — at any frame and at the end, counted by
+    /// `anima_geom::count_self_intersections` (0: it never passed through itself where it was looked
+    /// at). The counting is left out of `wall_seconds`.
+    pub self_intersections: Option<usize>,
     #[serde(flatten)]
     pub detail: Detail,
+}
+
+/// Counts a cloth's self-intersections at each frame: the largest count, and the time spent counting
+/// (so that a run's wall time stays the time of the run).
+#[derive(Debug, Default)]
+pub(crate) struct CrossingWatch {
+    pub largest: usize,
+    spent: std::time::Duration,
+}
+
+impl CrossingWatch {
+    pub fn look(&mut self, x: &[DVec3], triangles: &[[u32; 3]]) {
+        let started = std::time::Instant::now();
+        self.largest = self.largest.max(anima_geom::count_self_intersections(x, triangles));
+        self.spent += started.elapsed();
+    }
+
+    /// Seconds spent counting.
+    pub fn seconds(&self) -> f64 {
+        self.spent.as_secs_f64()
+    }
 }
 
 /// The numbers only one kind of scene has.

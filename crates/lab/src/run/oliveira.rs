@@ -15,7 +15,7 @@ use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{Detail, Progress, RunOptions, Summary, sheet_frames};
+use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames};
 use crate::oliveira::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
 
@@ -75,6 +75,7 @@ pub fn run(
     let mut next_frame = 1;
     let mut kept: Vec<Kept> = Vec::new();
     let mut write_error = None;
+    let mut watch = CrossingWatch::default();
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
     let mut too_long = false;
@@ -92,6 +93,7 @@ pub fn run(
                 write_error = Some(e);
                 return ControlFlow::Break(());
             }
+            watch.look(c.cloth().positions(), c.cloth().triangles());
             if opts.picture_dir().is_some() && shown.contains(&next_frame) {
                 kept.push((t, c.cloth().positions().to_vec(), c.cloth().triangles().to_vec()));
             }
@@ -100,12 +102,13 @@ pub fn run(
         }
         ControlFlow::Continue(())
     });
-    let wall_seconds = start.elapsed().as_secs_f64();
+    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     progress.end();
     if let Some(e) = write_error {
         return Err(e);
     }
     let c = cloth.cloth();
+    watch.look(c.positions(), c.triangles());
     let stats = cloth.stats();
     let summary = Summary {
         scene: label.to_owned(),
@@ -124,6 +127,7 @@ pub fn run(
             _ => None,
         },
         warnings: Vec::new(),
+        self_intersections: Some(watch.largest),
         detail: Detail::Oliveira(OliveiraDetail {
             integrator: loaded.scene.integrator.name().to_owned(),
             remesher: loaded.remesher.map(|r| format!("{r:?}")),

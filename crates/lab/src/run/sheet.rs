@@ -13,7 +13,7 @@ use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Result, bail};
 use serde::Serialize;
 
-use super::{Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
+use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 
 /// The numbers of a sheet run.
@@ -77,6 +77,7 @@ pub fn run(
     let start = Instant::now();
     let mut error = None;
     let mut diverged = false;
+    let mut watch = CrossingWatch::default();
     let mut frames = 0;
     if scene.integrator.is_adaptive() {
         // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
@@ -113,6 +114,7 @@ pub fn run(
                 break;
             }
             frames = k;
+            watch.look(&sim.state.x, &triangles);
             progress.advance(sim.steps_taken() as u64);
             if let Some(dir) = opts.frame_dir() {
                 write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
@@ -124,9 +126,10 @@ pub fn run(
             }
         }
     }
-    let wall_seconds = start.elapsed().as_secs_f64();
+    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     progress.end();
     let x = &sim.state.x;
+    watch.look(x, &triangles);
     let steps = sim.steps_taken();
     let summary = Summary {
         scene: label.to_owned(),
@@ -138,6 +141,7 @@ pub fn run(
         all_finite: !diverged && sim.state.first_non_finite().is_none(),
         error,
         warnings,
+        self_intersections: Some(watch.largest),
         detail: Detail::Sheet(SheetDetail {
             integrator: scene.integrator.name().to_owned(),
             dt: scene.dt_s,
