@@ -12,12 +12,19 @@ use anyhow::{Context, Result};
 /// The temporary files being written now.
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes every temporary file being written (for an interrupt handler: the program then ends).
+fn temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPORARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes every temporary file being written, for an interrupt handler: the program must end right
+/// after. The list stays locked from then on, and a temporary file is only created under that lock,
+/// so no writer can create a new one once these are gone (it waits for the end instead).
 pub fn remove_temporaries() {
-    let tmps = TEMPORARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let tmps = temporaries();
     for tmp in tmps.iter() {
         let _ = fs::remove_file(tmp);
     }
+    std::mem::forget(tmps);
 }
 
 /// Creates `dir` if it is not there and checks that a file can be written in it, before a run spends
@@ -58,17 +65,14 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?;
     let tmp = dir.join(format!(".{}.tmp{}", name.to_string_lossy(), std::process::id()));
-    let track = |add: bool| {
-        let mut tmps = TEMPORARIES.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-        if add {
-            tmps.push(tmp.clone());
-        } else if let Some(k) = tmps.iter().position(|t| *t == tmp) {
-            tmps.swap_remove(k);
-        }
-    };
-    track(true);
     let result = (|| {
-        let file = File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+        // Created and listed under one lock: an interrupt sees either no file or a listed one.
+        let file = {
+            let mut tmps = temporaries();
+            let file = File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+            tmps.push(tmp.clone());
+            file
+        };
         let mut w = BufWriter::new(file);
         fill(&mut w)?;
         let file = w
@@ -81,7 +85,10 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    track(false);
+    let mut tmps = temporaries();
+    if let Some(k) = tmps.iter().position(|t| *t == tmp) {
+        tmps.swap_remove(k);
+    }
     result
 }
 
