@@ -25,13 +25,21 @@
 //!    A zone that holds a pinned particle, or that still collides with itself, is frozen (velocity zero).
 //!
 //! Why the fail-safe terminates and guarantees the claim: a rigid velocity field moves a zone by the
-//! affine map x ↦ x + t h (v_c + ω × (x − x_c)), whose matrix I + t h [ω]× has determinant
-//! 1 + (t h |ω|)² > 0, so elements of one zone never become coplanar during the step unless they started
+//! affine map x ↦ x + t h (v_c + ω × (x − x_c)), whose matrix I + t h W (W the cross-product matrix
+//! of ω) has determinant 1 + (t h |ω|)² > 0, so elements of one zone never become coplanar during the step unless they started
 //! so; every detection round either merges two zones or freezes one, so rounds are at most twice the
 //! particle count; and a frozen particle ends where it started, so impacts among frozen particles only
 //! are not impacts of the step. Hence: if x₀ has no crossings, x₀ + h v̄ after the filter has none. (A
 //! last resort, freezing everything, stands behind a round cap that no test has reached; the stats say
 //! when it acted.)
+//!
+//! Known limit, measured on the folding-sheet tests: obstacles are answered before this filter, by
+//! their own response, which projects every particle that ends a step inside a collider onto its
+//! surface. Two layers pressed onto a floor can so become exactly coplanar (a vertex lying in the lower
+//! layer's triangle); no impulse separates a pair that is already touching, so each such pair becomes a
+//! frozen zone of four particles for the step (generalised-α at 1/120 s: about one a step once the
+//! sheet lies on the floor; symplectic Euler at 2·10⁻⁴ s: none). The claim holds, but those particles
+//! stick. Answering obstacles and self-contact in one filter, as Bridson et al. do, would remove it.
 //!
 //! Pinned particles (inverse mass 0) take no impulse; they keep their (possibly prescribed) velocity
 //! unless a zone they join is frozen, in which case they stay put for the step.
@@ -536,4 +544,78 @@ fn angular_velocity(inertia: DMat3, angular: DVec3) -> DVec3 {
     }
     let reg = inertia + DMat3::from_diagonal(DVec3::splat(1e-12 * trace));
     reg.inverse() * angular
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use anima_geom::count_self_intersections;
+
+    /// A triangle in z = 0 and a vertex above it moving down at `speed` (m/s) over a step of 0.01 s,
+    /// far enough to pass through it; the triangle's corners have inverse mass `triangle_inv_mass`.
+    fn falling_vertex(speed: f64, triangle_inv_mass: f64) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+        let x0 = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(0.2, 0.2, 0.01)];
+        let v = vec![DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, DVec3::new(0.0, 0.0, -speed)];
+        (x0, v, vec![triangle_inv_mass, triangle_inv_mass, triangle_inv_mass, 1.0])
+    }
+
+    /// The vertex's edges to the triangle's plane make the crossing countable: a second triangle
+    /// hangs from the vertex and stays put, so it is an (edge, triangle) crossing when the vertex passes
+    /// through.
+    const TRIANGLES: [[u32; 3]; 2] = [[0, 1, 2], [3, 4, 5]];
+
+    fn with_tail(
+        mut x: Vec<DVec3>,
+        mut v: Vec<DVec3>,
+        mut m: Vec<f64>,
+    ) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+        x.extend([x[3] + DVec3::new(0.1, 0.0, 0.05), x[3] + DVec3::new(0.0, 0.1, 0.05)]);
+        v.extend([DVec3::ZERO, DVec3::ZERO]);
+        m.extend([1.0, 1.0]);
+        (x, v, m)
+    }
+
+    #[test]
+    fn a_fast_vertex_is_stopped_on_a_pinned_triangle() {
+        let (x0, mut v, m) = {
+            let (x, v, m) = falling_vertex(10.0, 0.0);
+            with_tail(x, v, m)
+        };
+        let h = 0.01;
+        let mut x1 = vec![DVec3::ZERO; x0.len()];
+        let ends: Vec<DVec3> = x0.iter().zip(&v).map(|(x, v)| *x + *v * h).collect();
+        assert!(count_self_intersections(&ends, &TRIANGLES) > 0, "the unfiltered step must cross");
+        let stats = SelfCollisionResponse::new().apply(
+            &SelfCollision::default(),
+            h,
+            &x0,
+            &mut v,
+            &m,
+            &TRIANGLES,
+            &mut x1,
+        );
+        assert_eq!(count_self_intersections(&x1, &TRIANGLES), 0, "{stats:?}");
+        assert!(stats.impacts > 0, "{stats:?}");
+        assert!(v[..3].iter().all(|v| *v == DVec3::ZERO), "pinned corners moved");
+        assert!(x1[3].z > 0.0, "{:?}", x1[3]);
+    }
+
+    #[test]
+    fn impact_zones_keep_momentum_and_end_without_crossings() {
+        // No impulse passes: the zones alone must answer the impact.
+        let settings = SelfCollision { max_impact_iterations: 0, ..SelfCollision::default() };
+        let (x0, mut v, m) = {
+            let (x, mut v, m) = falling_vertex(10.0, 1.0);
+            v[1] = DVec3::new(0.0, 0.0, 3.0);
+            with_tail(x, v, m)
+        };
+        let momentum = |v: &[DVec3]| v.iter().zip(&m).map(|(v, m)| *v / *m).sum::<DVec3>();
+        let before = momentum(&v);
+        let h = 0.01;
+        let mut x1 = vec![DVec3::ZERO; x0.len()];
+        let stats = SelfCollisionResponse::new().apply(&settings, h, &x0, &mut v, &m, &TRIANGLES, &mut x1);
+        assert!(stats.zones > 0 && stats.frozen_zones == 0, "{stats:?}");
+        assert!((momentum(&v) - before).length() < 1e-12, "{:?} → {:?}", before, momentum(&v));
+        assert_eq!(count_self_intersections(&x1, &TRIANGLES), 0, "{stats:?}");
+    }
 }
