@@ -15,9 +15,9 @@
 //!    the thickness and τ [`SelfCollision::repulsion_time_s`], so the repulsion never restores more than
 //!    the thickness in one step (the bound of Bridson's spring impulse) and resting layers do not jitter.
 //!    Coulomb friction caps the change of the tangential relative velocity at μ times the normal change.
-//! 2. **Impacts.** Continuous detection over x₀ → x₀ + h v̄ with the current velocities; each impact gets
-//!    an inelastic impulse (relative normal velocity at the point of impact to zero, friction as above),
-//!    processed one after the other so that later impacts see earlier impulses (Gauss–Seidel). Repeated
+//! 2. **Impacts.** Continuous detection over x₀ → x₀ + h v̄ with the current velocities (and contacts
+//!    at the end of the step, below); each impact gets an inelastic impulse (relative normal velocity
+//!    at the point of impact to zero, friction as above), processed one after the other so that later impacts see earlier impulses (Gauss–Seidel). Repeated
 //!    until a pass finds nothing, at most [`SelfCollision::max_impact_iterations`] passes.
 //! 3. **Rigid impact zones (the fail-safe).** The particles of the impacts that remain are merged into
 //!    zones; each zone moves with the rigid velocity field that keeps its linear and angular momentum
@@ -33,13 +33,14 @@
 //! last resort, freezing everything, stands behind a round cap that no test has reached; the stats say
 //! when it acted.)
 //!
-//! Known limit, measured on the folding-sheet tests: obstacles are answered before this filter, by
-//! their own response, which projects every particle that ends a step inside a collider onto its
-//! surface. Two layers pressed onto a floor can so become exactly coplanar (a vertex lying in the lower
-//! layer's triangle); no impulse separates a pair that is already touching, so each such pair becomes a
-//! frozen zone of four particles for the step (generalised-α at 1/120 s: about one a step once the
-//! sheet lies on the floor; symplectic Euler at 2·10⁻⁴ s: none). The claim holds, but those particles
-//! stick. Answering obstacles and self-contact in one filter, as Bridson et al. do, would remove it.
+//! Obstacles are answered before this filter, by the model's own response, which projects particles
+//! that end a step inside a collider onto its surface, and so can put two layers exactly on the same
+//! plane at the end of the step. Continuous detection alone misses that (the instant of coplanarity is
+//! t = 1, where rounding hides the cubic's root), and two layers that start a step touching cannot be
+//! told apart by any impulse: on the folding-sheet tests every such pair then froze a zone, step after
+//! step. So the impact stages also take elements that end the step closer than the impact distance,
+//! on the side they started on, and push them to twice that distance apart; with it those tests need
+//! no zone at all.
 //!
 //! Pinned particles (inverse mass 0) take no impulse; they keep their (possibly prescribed) velocity
 //! unless a zone they join is frozen, in which case they stay put for the step.
@@ -267,18 +268,15 @@ impl SelfCollisionResponse {
         self.predict(x0, v, h);
         self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
         let mut found = 0;
-        let end = |v: &[DVec3], i: usize| x0[i] + v[i] * h;
+        let delta = settings.impact_distance;
         for k in 0..self.broad.vertex_triangle_pairs().len() {
             let pair = self.broad.vertex_triangle_pairs()[k];
             let p = pair.vertex as usize;
             let [a, b, c] = triangles[pair.triangle as usize].map(|i| i as usize);
             let ids = [p, a, b, c];
-            let hit =
-                vertex_triangle_impact(ids.map(|i| x0[i]), ids.map(|i| end(v, i)), settings.impact_distance);
-            if let Some(hit) = hit {
-                let w = hit.barycentric;
-                let s = Stencil { particles: ids, weights: [1.0, -w[0], -w[1], -w[2]], normal: hit.normal };
-                s.impulse(v, inv_mass, 0.0, settings.friction);
+            let end = ids.map(|i| x0[i] + v[i] * h);
+            if let Some(hit) = vertex_triangle_contact(ids.map(|i| x0[i]), end, delta) {
+                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
                 found += 1;
             }
         }
@@ -286,12 +284,9 @@ impl SelfCollisionResponse {
             let pair = self.broad.edge_edge_pairs()[k];
             let [[a0, a1], [b0, b1]] = pair.edges.map(|e| e.map(|i| i as usize));
             let ids = [a0, a1, b0, b1];
-            let hit = edge_edge_impact(ids.map(|i| x0[i]), ids.map(|i| end(v, i)), settings.impact_distance);
-            if let Some(hit) = hit {
-                let [s0, s1] = hit.s;
-                let weights = [1.0 - s0, s0, -(1.0 - s1), -s1];
-                let s = Stencil { particles: ids, weights, normal: hit.normal };
-                s.impulse(v, inv_mass, 0.0, settings.friction);
+            let end = ids.map(|i| x0[i] + v[i] * h);
+            if let Some(hit) = edge_edge_contact(ids.map(|i| x0[i]), end, delta) {
+                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
                 found += 1;
             }
         }
@@ -387,18 +382,14 @@ impl SelfCollisionResponse {
         self.predict(x0, v, h);
         self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
         self.impacts.clear();
+        let delta = settings.impact_distance;
         let still = |ids: &[usize; 4]| ids.iter().all(|&i| v[i] == DVec3::ZERO);
         for pair in self.broad.vertex_triangle_pairs() {
             let p = pair.vertex as usize;
             let [a, b, c] = triangles[pair.triangle as usize].map(|i| i as usize);
             let ids = [p, a, b, c];
             if !still(&ids)
-                && vertex_triangle_impact(
-                    ids.map(|i| x0[i]),
-                    ids.map(|i| self.x1[i]),
-                    settings.impact_distance,
-                )
-                .is_some()
+                && vertex_triangle_contact(ids.map(|i| x0[i]), ids.map(|i| self.x1[i]), delta).is_some()
             {
                 self.impacts.push(ids.map(|i| i as u32));
             }
@@ -406,9 +397,7 @@ impl SelfCollisionResponse {
         for pair in self.broad.edge_edge_pairs() {
             let [[a0, a1], [b0, b1]] = pair.edges.map(|e| e.map(|i| i as usize));
             let ids = [a0, a1, b0, b1];
-            if !still(&ids)
-                && edge_edge_impact(ids.map(|i| x0[i]), ids.map(|i| self.x1[i]), settings.impact_distance)
-                    .is_some()
+            if !still(&ids) && edge_edge_contact(ids.map(|i| x0[i]), ids.map(|i| self.x1[i]), delta).is_some()
             {
                 self.impacts.push(ids.map(|i| i as u32));
             }
@@ -493,16 +482,25 @@ impl Stencil {
     /// Coulomb friction removes up to μ Δv_n of the tangential relative velocity in the same impulse.
     /// Returns whether it acted.
     fn impulse(&self, v: &mut [DVec3], inv_mass: &[f64], target_vn: f64, friction: f64) -> bool {
-        let rel = (0..4).fold(DVec3::ZERO, |r, k| r + v[self.particles[k]] * self.weights[k]);
-        let vn = rel.dot(self.normal);
+        let vn = self.relative(v).dot(self.normal);
         if vn >= target_vn {
             return false;
         }
+        self.raise(v, inv_mass, target_vn - vn, friction)
+    }
+
+    fn relative(&self, v: &[DVec3]) -> DVec3 {
+        (0..4).fold(DVec3::ZERO, |r, k| r + v[self.particles[k]] * self.weights[k])
+    }
+
+    /// Adds `dvn` > 0 to the relative normal velocity, with friction; see [`Stencil::impulse`].
+    fn raise(&self, v: &mut [DVec3], inv_mass: &[f64], dvn: f64, friction: f64) -> bool {
+        let rel = self.relative(v);
+        let vn = rel.dot(self.normal);
         let denom: f64 = (0..4).map(|k| self.weights[k].powi(2) * inv_mass[self.particles[k]]).sum();
         if denom <= 0.0 {
             return false;
         }
-        let dvn = target_vn - vn;
         let vt = rel - self.normal * vn;
         let st = vt.length();
         let dvt = if st > 0.0 { vt * -(friction * dvn / st).min(1.0) } else { DVec3::ZERO };
@@ -513,6 +511,89 @@ impl Stencil {
         }
         true
     }
+}
+
+/// A contact of the impact stages, over the step: an impact found by continuous detection, or two
+/// elements that end the step closer than the impact distance without having met on the way.
+#[derive(Debug, Clone, Copy)]
+struct Hit {
+    weights: [f64; 4],
+    normal: DVec3,
+    /// For an end-of-step contact, the normal distance at the end, m; `None` for an impact.
+    end_gap: Option<f64>,
+}
+
+impl Hit {
+    /// An impact gets the inelastic impulse (relative normal velocity to zero); an end-of-step contact
+    /// the relative normal velocity that ends the step twice the impact distance `delta` apart. The latter
+    /// matters because continuous detection sees a contact at its instant of coplanarity, and elements
+    /// that become coplanar exactly at the end of the step (an obstacle's projection puts two layers
+    /// on its surface) have that instant at t = 1, where rounding can hide the cubic's root; left
+    /// alone, they would start the next step touching, which no impulse can undo.
+    fn answer(&self, ids: [usize; 4], v: &mut [DVec3], inv_mass: &[f64], h: f64, delta: f64, friction: f64) {
+        let s = Stencil { particles: ids, weights: self.weights, normal: self.normal };
+        match self.end_gap {
+            None => {
+                s.impulse(v, inv_mass, 0.0, friction);
+            }
+            Some(gap) => {
+                s.raise(v, inv_mass, (2.0 * delta - gap).max(0.0) / h, friction);
+            }
+        }
+    }
+}
+
+/// The impact of vertex `[0]` with triangle `[1..]` over the step `start → end`, or their contact at
+/// the end of it (closer than `delta` there, on the side the vertex started on).
+fn vertex_triangle_contact(start: [DVec3; 4], end: [DVec3; 4], delta: f64) -> Option<Hit> {
+    if let Some(hit) = vertex_triangle_impact(start, end, delta) {
+        let w = hit.barycentric;
+        return Some(Hit { weights: [1.0, -w[0], -w[1], -w[2]], normal: hit.normal, end_gap: None });
+    }
+    let [p, a, b, c] = end;
+    let q = point_triangle_proximity(p, [a, b, c]);
+    if q.distance > delta {
+        return None;
+    }
+    let side = (start[2] - start[1]).cross(start[3] - start[1]).dot(start[0] - start[1]);
+    let face = (b - a).cross(c - a).try_normalize()?;
+    let normal = if side < 0.0 {
+        -face
+    } else if side > 0.0 {
+        face
+    } else {
+        return None;
+    };
+    let w = q.barycentric;
+    let gap = (p - q.point).dot(normal).max(0.0);
+    Some(Hit { weights: [1.0, -w[0], -w[1], -w[2]], normal, end_gap: Some(gap) })
+}
+
+/// The impact of edges `[0]–[1]` and `[2]–[3]` over the step, or their contact at the end of it (as
+/// [`vertex_triangle_contact`], the side taken along the edges' common normal at the start).
+fn edge_edge_contact(start: [DVec3; 4], end: [DVec3; 4], delta: f64) -> Option<Hit> {
+    if let Some(hit) = edge_edge_impact(start, end, delta) {
+        let [s0, s1] = hit.s;
+        return Some(Hit { weights: [1.0 - s0, s0, -(1.0 - s1), -s1], normal: hit.normal, end_gap: None });
+    }
+    let [a0, a1, b0, b1] = end;
+    let q = edge_edge_proximity([a0, a1], [b0, b1]);
+    if q.distance > delta {
+        return None;
+    }
+    let axis0 = (start[1] - start[0]).cross(start[3] - start[2]);
+    let side = axis0.dot(start[0] - start[2]);
+    let axis = (a1 - a0).cross(b1 - b0).try_normalize()?;
+    let normal = if side < 0.0 {
+        -axis
+    } else if side > 0.0 {
+        axis
+    } else {
+        return None;
+    };
+    let [s0, s1] = q.s;
+    let gap = (q.points[0] - q.points[1]).dot(normal).max(0.0);
+    Some(Hit { weights: [1.0 - s0, s0, -(1.0 - s1), -s1], normal, end_gap: Some(gap) })
 }
 
 /// Relative velocity of a vertex `ids[0]` and the point of triangle `ids[1..]` with weights `w`.
