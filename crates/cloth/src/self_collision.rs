@@ -699,4 +699,35 @@ mod tests {
         assert!((momentum(&v) - before).length() < 1e-12, "{:?} → {:?}", before, momentum(&v));
         assert_eq!(count_self_intersections(&x1, &TRIANGLES), 0, "{stats:?}");
     }
+
+    #[test]
+    fn steps_after_warm_up_allocate_nothing() {
+        // Warm up on the step with the most work (the zones), then lighter steps must reuse every buffer.
+        let (x0, v, m) = {
+            let (x, mut v, m) = falling_vertex(10.0, 1.0);
+            v[1] = DVec3::new(0.0, 0.0, 3.0);
+            with_tail(x, v, m)
+        };
+        let settings = SelfCollision { max_impact_iterations: 0, ..SelfCollision::default() };
+        let mut response = SelfCollisionResponse::new();
+        let mut x1 = vec![DVec3::ZERO; x0.len()];
+        response.apply(&settings, 0.01, &x0, &mut v.clone(), &m, &TRIANGLES, &mut x1);
+        let fingerprint = |r: &SelfCollisionResponse| {
+            [
+                (r.x1.as_ptr() as usize, r.x1.capacity()),
+                (r.parent.as_ptr() as usize, r.parent.capacity()),
+                (r.members.as_ptr() as usize, r.members.capacity()),
+                (r.mass.as_ptr() as usize, r.mass.capacity()),
+                (r.inertia.as_ptr() as usize, r.inertia.capacity()),
+                (r.impacts.as_ptr() as usize, r.impacts.capacity()),
+            ]
+        };
+        let warm = fingerprint(&response);
+        for speed in [10.0, 1.0, 0.0] {
+            let mut v = v.clone();
+            v[3].z = -speed;
+            response.apply(&settings, 0.01, &x0, &mut v, &m, &TRIANGLES, &mut x1);
+            assert_eq!(fingerprint(&response), warm, "speed {speed}");
+        }
+    }
 }
