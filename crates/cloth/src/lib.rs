@@ -9,7 +9,9 @@
 //! - [`oliveira`]: Oliveira 2013's triangle-mesh cloth on static solids, and its adaptive remeshing.
 //!
 //! Contact with static objects is answered after the step by each model's own response (the theses'
-//! split), or inside the implicit step ([`contact_mode::ContactMode`], generalised-α only).
+//! split), or inside the implicit step ([`contact_mode::ContactMode`], generalised-α only). A sheet can
+//! also be kept from passing through itself ([`self_collision`]: repulsion, impact impulses and rigid
+//! impact zones after the step, a modern option beside the theses' responses).
 //!
 //! Knows nothing about rigid bodies or files: colliders are `anima_geom` shapes and meshes handed in by
 //! the caller. Everything is `f64` and stored as flat arrays over all particles of all surfaces.
@@ -43,4 +45,5 @@ pub mod contact_mode;
 pub mod flex3d;
 pub mod network_sim;
 pub mod oliveira;
+pub mod self_collision;
 pub mod spring_net;

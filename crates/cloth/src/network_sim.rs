@@ -3,12 +3,18 @@
 //! positions and remove the approaching normal velocity, with Coulomb friction on the tangential part),
 //! or, with [`ContactMode::InSolve`] and generalised-α, constrained inside the implicit solve
 //! ([`AnalyticContacts`]).
+//!
+//! With [`NetworkSim::self_collision`] set (and the network's triangles given with
+//! [`NetworkSim::enable_self_collision`]), the cloth is also kept from passing through itself: after the
+//! step and the colliders, the step's motion goes through the [`SelfCollisionResponse`] velocity filter
+//! (Bridson, Fedkiw & Anderson 2002), whatever the integrator.
 
 use anima_geom::DVec3;
 use anima_ode::contact::{Contact, ContactModel};
 use anima_ode::{Integrator, OdeError, State, StepStats, Stepper};
 
 use crate::contact_mode::ContactMode;
+use crate::self_collision::{SelfCollision, SelfCollisionResponse, SelfCollisionStats};
 use crate::spring_net::SpringNetwork;
 
 /// A static obstacle given analytically.
@@ -156,6 +162,20 @@ pub struct NetworkSim {
     pub margin: f64,
     /// Where contacts are answered: after the step (the default) or inside the implicit solve.
     pub contact: ContactMode,
+    /// Self-collision response after the step, when set (see [`NetworkSim::enable_self_collision`]).
+    /// Off by default: the theses' sheets pass through themselves.
+    pub self_collision: Option<SelfCollision>,
+    /// The cloth surface self-collision keeps apart; empty until enabled.
+    triangles: Vec<[u32; 3]>,
+    self_response: SelfCollisionResponse,
+    /// Average velocities of the step, (x₁ − x₀)/h, before and after the self-collision filter.
+    step_velocity: Vec<DVec3>,
+    filtered_velocity: Vec<DVec3>,
+    /// Inverse masses with 0 for pinned particles, as the self-collision response takes them.
+    inv_mass: Vec<f64>,
+    /// What the self-collision response did at the last step, and summed over the run.
+    pub self_collision_last: SelfCollisionStats,
+    pub self_collision_total: SelfCollisionStats,
     /// Per particle, whether the last contact pass after the step moved it.
     touched: Vec<bool>,
     step: usize,
@@ -176,6 +196,14 @@ impl NetworkSim {
             friction: 0.0,
             margin: 1e-3,
             contact: ContactMode::AfterStep,
+            self_collision: None,
+            triangles: Vec::new(),
+            self_response: SelfCollisionResponse::new(),
+            step_velocity: Vec::new(),
+            filtered_velocity: Vec::new(),
+            inv_mass: Vec::new(),
+            self_collision_last: SelfCollisionStats::default(),
+            self_collision_total: SelfCollisionStats::default(),
             touched: vec![false; n],
             step: 0,
             dt,
@@ -193,6 +221,41 @@ impl NetworkSim {
 
     pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
         &mut self.stepper
+    }
+
+    /// Turns the self-collision response on for the cloth surface `triangles` (particle indices; for a
+    /// sheet, [`crate::spring_net::SheetSpec::triangles`]). Several disjoint surfaces in one network are
+    /// one triangle list.
+    ///
+    /// # Panics
+    /// If a triangle names a particle outside the network or repeats a particle.
+    pub fn enable_self_collision(&mut self, settings: SelfCollision, triangles: Vec<[u32; 3]>) {
+        let n = self.network.n_particles();
+        for (k, t) in triangles.iter().enumerate() {
+            assert!(t.iter().all(|&i| (i as usize) < n), "triangle {k} names a particle outside the network");
+            assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "triangle {k} repeats a particle");
+        }
+        self.self_collision = Some(settings);
+        self.triangles = triangles;
+    }
+
+    /// The surface self-collision acts on (empty until [`NetworkSim::enable_self_collision`]).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Moves pinned particles along a prescribed path: sets each pinned particle's velocity so that the
+    /// next step ends it on `target(particle_idx)`. Pinned particles have no acceleration in any
+    /// integrator and move x₁ = x₀ + h v (generalised-α included), so the step lands them exactly; call
+    /// before every step. Only a frozen self-collision impact zone holds one back (it then stays put for
+    /// the step), and the next call's velocity makes up for it.
+    pub fn drive_pinned(&mut self, mut target: impl FnMut(usize) -> DVec3) {
+        let inv_dt = 1.0 / self.dt;
+        for (p, &pin) in self.network.pinned().iter().enumerate() {
+            if pin {
+                self.state.v[p] = (target(p) - self.state.x[p]) * inv_dt;
+            }
+        }
     }
 
     /// One step: integrate, then resolve contacts (or integrate with the contacts constrained inside the
@@ -222,6 +285,12 @@ impl NetworkSim {
         if !in_solve && !self.colliders.is_empty() && self.resolve_contacts() {
             self.stepper.reset_history_of(&self.touched);
         }
+        if let Some(settings) = self.self_collision
+            && !self.triangles.is_empty()
+            && self.resolve_self_collisions(&settings)
+        {
+            self.stepper.reset_history_of(&self.touched);
+        }
         self.step += 1;
         Ok(())
     }
@@ -235,6 +304,48 @@ impl NetworkSim {
             }
         }
         Ok(())
+    }
+
+    /// The self-collision filter on the step's average velocities v̄ = (x₁ − x₀)/h, which is the motion
+    /// the step made whatever the integrator. The positions become x₀ + h v̄' (the Bridson position
+    /// update: the straight path the response made collision-free), and the end velocity takes the same
+    /// change, v₁ += v̄' − v̄ (for symplectic Euler v₁ = v̄, so it becomes v̄'; generalised-α keeps the
+    /// part of its end velocity that differs from the average). Returns whether any particle changed.
+    fn resolve_self_collisions(&mut self, settings: &SelfCollision) -> bool {
+        let n = self.network.n_particles();
+        let h = self.dt;
+        if self.inv_mass.len() != n {
+            let masses = anima_ode::Linearized::masses(&self.network);
+            let pinned = self.network.pinned();
+            self.inv_mass = masses.iter().zip(pinned).map(|(m, &p)| if p { 0.0 } else { 1.0 / m }).collect();
+        }
+        // After the swap, `scratch` holds the step's start and `state` its end.
+        let (x0, x1) = (&self.scratch.x, &mut self.state.x);
+        self.step_velocity.clear();
+        self.step_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
+        self.filtered_velocity.clear();
+        self.filtered_velocity.extend_from_slice(&self.step_velocity);
+        let stats = self.self_response.apply(
+            settings,
+            h,
+            x0,
+            &mut self.filtered_velocity,
+            &self.inv_mass,
+            &self.triangles,
+            x1,
+        );
+        self.self_collision_last = stats;
+        self.self_collision_total += stats;
+        let mut any = false;
+        self.touched.fill(false);
+        for (i, (after, before)) in self.filtered_velocity.iter().zip(&self.step_velocity).enumerate() {
+            if after != before {
+                self.state.v[i] += *after - *before;
+                self.touched[i] = true;
+                any = true;
+            }
+        }
+        any
     }
 
     /// Pushes particles out of colliders (at their entry point when they crossed the surface during the

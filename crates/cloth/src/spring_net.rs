@@ -536,6 +536,11 @@ impl SheetSpec {
             .collect()
     }
 
+    /// The sheet's surface, two triangles per cell (the triangulation its OBJ frames are written with).
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        anima_geom::grid_triangles(self.n, self.n)
+    }
+
     /// Builds the network: springs at their initial lengths, structural then shear then bend.
     pub fn build(&self) -> SpringNetwork {
         let (n, x) = (self.n, self.positions());
