@@ -86,11 +86,16 @@ pub fn segment_triangle(o: DVec3, dir: DVec3, tri: &PreparedTriangle) -> Option<
         }
         alpha = (v0 - beta * tri.v2) / tri.v1;
     } else {
-        beta = (v0 * tri.u1 - u0 * tri.v1) / (tri.v2 * tri.u1 - tri.u2 * tri.v1);
+        let det = tri.v2 * tri.u1 - tri.u2 * tri.v1;
+        beta = (v0 * tri.u1 - u0 * tri.v1) / det;
         if !(0.0..=1.0).contains(&beta) {
             return None;
         }
-        alpha = (u0 - beta * tri.u2) / tri.u1;
+        // Badouel's α = (u0 − β u2)/u1 divides by u1, which can be a rounding residue (1e-16 on an edge
+        // that is parallel to the axis in exact arithmetic): β rounded to 1 then made α exactly 0 and
+        // reported a point √2 m outside the triangle as on its edge. Cramer's rule divides by the
+        // projected area instead.
+        alpha = (u0 * tri.v2 - tri.u2 * v0) / det;
     }
     if alpha >= 0.0 && alpha + beta <= 1.0 {
         Some(SegmentHit { s, barycentric: [1.0 - alpha - beta, alpha, beta] })
@@ -147,6 +152,22 @@ impl Aabb {
 
 #[cfg(test)]
 mod tests {
+    /// A path from the fourth corner of a grid square, tested against the square's other triangle, whose
+    /// edge V0V1 is parallel to the y axis up to a rounding residue (u1 = 1.1e-16): Badouel's α = (u0 −
+    /// β u2)/u1 came out exactly 0 and reported the corner, √2 m from the triangle, as on its edge (found
+    /// on the sail of FLEX3D's E-5).
+    #[test]
+    fn a_point_off_the_triangle_is_not_on_its_edge_when_an_edge_is_nearly_axis_parallel() {
+        let tri = PreparedTriangle::new([
+            DVec3::new(-1.0, 38.995158604, 0.009682792000000008),
+            DVec3::new(-0.9999999999999999, 36.995158604, 0.009682792000000008),
+            DVec3::new(1.0, 36.995158604, 0.009682791999999996),
+        ]);
+        let o = DVec3::new(1.0, 38.995158604, 0.009682791999999996);
+        let dir = DVec3::new(0.0, -0.0002830239999980222, 0.0005660479999999996);
+        assert_eq!(segment_triangle(o, dir, &tri), None);
+    }
+
     use super::*;
 
     fn unit_tri() -> PreparedTriangle {

@@ -5,7 +5,8 @@
 //! Two ways to bin: [`Binning::Spanning`] puts a triangle in every cell its box overlaps (for static
 //! objects, built once, whose triangles may be large), and [`Binning::MinCorner`] puts it only in the cell
 //! of its box's lowest corner, with cells as large as the largest box, so that a query widened by one cell
-//! still finds it (for surfaces, rebuilt every step: one entry per triangle keeps the rebuild cheap).
+//! still finds it (for surfaces, whose boxes move and are rebinned every few steps: one entry per
+//! triangle keeps a rebuild cheap).
 
 use anima_geom::{Aabb, DVec3};
 
