@@ -65,6 +65,11 @@ enum Command {
         /// instead of rewriting docs/benchmarks.md.
         #[arg(long)]
         only: Option<String>,
+        /// Instead: time anima beside the peers (Warp, MuJoCo) on the standard scenes, alternately in one
+        /// run, and write docs/benchmarks-peers.md. Needs ANIMA_PEERS (the peers' script folder) and a
+        /// Python with them (ANIMA_PEERS_PYTHON); installs nothing, and without them times anima alone.
+        #[arg(long)]
+        peers: bool,
     },
 }
 
@@ -128,6 +133,18 @@ fn main() -> Result<()> {
             reproduce(&repo, &experiment, friction, adaptive, seeds)
         }
         Command::Figures { only } => figures::all(&repo, only.as_deref()),
-        Command::Bench { quick, only } => bench::run(&repo, quick, only.as_deref()),
+        Command::Bench { peers: true, .. } => {
+            // The binary a user runs, built as they build it.
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let status = std::process::Command::new(cargo)
+                .args(["build", "--release", "--quiet", "-p", "anima"])
+                .current_dir(repo.root())
+                .status()?;
+            anyhow::ensure!(status.success(), "building anima failed");
+            let target = std::env::var_os("CARGO_TARGET_DIR")
+                .map_or_else(|| repo.root().join("target"), std::path::PathBuf::from);
+            anima_lab::peers::run(&repo, &target.join("release/anima"))
+        }
+        Command::Bench { quick, only, .. } => bench::run(&repo, quick, only.as_deref()),
     }
 }

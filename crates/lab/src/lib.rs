@@ -48,6 +48,7 @@ pub mod nunes;
 pub mod oliveira;
 pub mod optimise;
 pub mod output;
+pub mod peers;
 pub mod picture;
 pub mod repo;
 pub mod report;
