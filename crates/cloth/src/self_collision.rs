@@ -48,6 +48,60 @@
 use anima_geom::self_contact::{edge_edge_proximity, point_triangle_proximity};
 use anima_geom::{DVec3, SelfContactBroadPhase, edge_edge_impact, vertex_triangle_impact};
 use glam::DMat3;
+use serde::{Deserialize, Serialize};
+
+/// How a model keeps its cloth from passing through itself (and, with several surfaces, through one
+/// another). A closed choice that scene files and `anima run --self-collision` name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum SelfCollisionMode {
+    /// The thesis's own response: for FLEX3D, the swept particle–triangle test with the 1-D elastic
+    /// impact (Nedel 1993 §3.5.4), which leaves crossings behind once a sheet folds; Oliveira 2013 has
+    /// none, so for its cloth this is [`SelfCollisionMode::Off`]. The default: faithful first.
+    #[default]
+    Faithful,
+    /// This module's response after the step ([`SelfCollisionResponse`]): a step that starts without
+    /// crossings ends without them.
+    Modern,
+    /// No self-collision at all: the cloth passes through itself freely.
+    Off,
+}
+
+impl SelfCollisionMode {
+    /// Whether this is the default: scene structs skip the field when writing it, so that every scene
+    /// file written before the switch existed is written the same.
+    pub fn is_faithful(&self) -> bool {
+        *self == SelfCollisionMode::Faithful
+    }
+
+    /// The name on the command line: `faithful`, `modern` or `off`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SelfCollisionMode::Faithful => "faithful",
+            SelfCollisionMode::Modern => "modern",
+            SelfCollisionMode::Off => "off",
+        }
+    }
+}
+
+impl std::fmt::Display for SelfCollisionMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SelfCollisionMode {
+    type Err = String;
+
+    /// `faithful` (also `thesis`), `modern` or `off` (also `none`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "faithful" | "thesis" => Ok(SelfCollisionMode::Faithful),
+            "modern" => Ok(SelfCollisionMode::Modern),
+            "off" | "none" => Ok(SelfCollisionMode::Off),
+            _ => Err(format!("unknown self-collision mode `{s}`; expected `faithful`, `modern` or `off`")),
+        }
+    }
+}
 
 /// Settings of the self-collision response. Lengths in m, times in s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -110,6 +164,9 @@ pub struct SelfCollisionStats {
     pub zone_iterations: usize,
     /// Whether the last resort (every particle frozen) acted.
     pub froze_everything: bool,
+    /// Particles whose motion over the step the response changed
+    /// ([`SelfCollisionResponse::filter_step`] only).
+    pub changed_particles: usize,
 }
 
 impl std::ops::AddAssign for SelfCollisionStats {
@@ -122,6 +179,7 @@ impl std::ops::AddAssign for SelfCollisionStats {
         self.frozen_zones += o.frozen_zones;
         self.zone_iterations += o.zone_iterations;
         self.froze_everything |= o.froze_everything;
+        self.changed_particles += o.changed_particles;
     }
 }
 
@@ -145,6 +203,9 @@ pub struct SelfCollisionResponse {
     impacts: Vec<[u32; 4]>,
     /// Zones (by root) found colliding with themselves in a round.
     self_impacts: Vec<u32>,
+    /// [`SelfCollisionResponse::filter_step`]'s average velocities of the step, before and after.
+    step_velocity: Vec<DVec3>,
+    filtered_velocity: Vec<DVec3>,
 }
 
 /// A contact between four particles: relative velocity Σ wₖ vₖ along `normal` (weights +1 for the
@@ -245,6 +306,48 @@ impl SelfCollisionResponse {
         for i in 0..n {
             x1[i] = x0[i] + v[i] * h;
         }
+        stats
+    }
+
+    /// The response on a step a model has already taken, from `x0` to `x1` with end velocities `v1`:
+    /// filters the step's average velocities v̄ = (x₁ − x₀)/h (the motion the step made, whatever the
+    /// integrator), puts the positions at x₀ + h v̄' (the Bridson position update: the straight path
+    /// the response made collision-free) and gives the end velocity the same change, v₁ += v̄' − v̄ (for
+    /// symplectic Euler v₁ = v̄, so it becomes v̄'; other methods keep the part of their end velocity
+    /// that differs from the average). Marks in `touched` the particles it changed (and leaves the
+    /// others as they were), so that the caller can reset a multistep history for them.
+    ///
+    /// # Panics
+    /// As [`SelfCollisionResponse::apply`], and if `touched` has not one entry per particle.
+    #[expect(clippy::too_many_arguments, reason = "the state of a step, each slice one physical field")]
+    pub fn filter_step(
+        &mut self,
+        settings: &SelfCollision,
+        h: f64,
+        x0: &[DVec3],
+        x1: &mut [DVec3],
+        v1: &mut [DVec3],
+        inv_mass: &[f64],
+        triangles: &[[u32; 3]],
+        touched: &mut [bool],
+    ) -> SelfCollisionStats {
+        assert!(v1.len() == x0.len() && touched.len() == x0.len(), "one entry per particle");
+        let mut step_velocity = std::mem::take(&mut self.step_velocity);
+        let mut filtered = std::mem::take(&mut self.filtered_velocity);
+        step_velocity.clear();
+        step_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
+        filtered.clear();
+        filtered.extend_from_slice(&step_velocity);
+        let mut stats = self.apply(settings, h, x0, &mut filtered, inv_mass, triangles, x1);
+        for (i, (after, before)) in filtered.iter().zip(&step_velocity).enumerate() {
+            if after != before {
+                v1[i] += *after - *before;
+                touched[i] = true;
+                stats.changed_particles += 1;
+            }
+        }
+        self.step_velocity = step_velocity;
+        self.filtered_velocity = filtered;
         stats
     }
 

@@ -113,11 +113,7 @@ pub fn run(
     let mut failure = None;
     let mut frames_done = 0;
     // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
-    let triangles: Vec<[u32; 3]> = world
-        .surfaces()
-        .iter()
-        .flat_map(|info| info.triangles.iter().map(|t| t.map(|i| i + info.offset as u32)))
-        .collect();
+    let triangles = world.all_triangles();
     let mut watch = CrossingWatch::default();
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
