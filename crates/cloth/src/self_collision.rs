@@ -128,7 +128,20 @@ impl SelfCollision {
     pub fn with_thickness(thickness: f64) -> Self {
         Self { thickness, impact_distance: 0.01 * thickness, ..Self::default() }
     }
+
+    /// The response the models' `Modern` mode uses on a cloth whose smallest rest spacing between
+    /// neighbouring particles is `spacing` (m, or a FLEX3D scene's units): thickness
+    /// [`THICKNESS_OF_SPACING`] times it, the rest as [`SelfCollision::with_thickness`].
+    pub fn for_spacing(spacing: f64) -> Self {
+        Self::with_thickness(THICKNESS_OF_SPACING * spacing)
+    }
 }
+
+/// The models' cloth thickness as a fraction of their smallest particle spacing: thin enough that
+/// layers resting at it look like touching sheets, thick enough that one step of a fast cloth (the
+/// sail of FLEX3D's E-5 moves a tenth of its spacing per step at most) does not cross it. The default
+/// response's 2 mm on a 64 × 64 metre sheet is an eighth of its spacing.
+pub const THICKNESS_OF_SPACING: f64 = 0.1;
 
 impl Default for SelfCollision {
     /// Thickness 2 mm (a few times thinner than a 64 × 64 metre sheet's spacing), friction 0.3,
@@ -287,14 +300,15 @@ impl SelfCollisionResponse {
             }
         }
 
-        // 2. Impact passes.
+        // 2. Impact passes. An impact among particles that all have inverse mass 0 (pinned, or held
+        // by an object) takes no impulse; it goes straight to the zones, which freeze it.
         let mut clear = false;
         for _ in 0..settings.max_impact_iterations {
             stats.impact_iterations += 1;
-            let found = self.impact_pass(settings, h, x0, v, inv_mass, triangles);
-            stats.impacts += found;
-            if found == 0 {
-                clear = true;
+            let (answered, immovable) = self.impact_pass(settings, h, x0, v, inv_mass, triangles);
+            stats.impacts += answered;
+            if answered == 0 {
+                clear = immovable == 0;
                 break;
             }
         }
@@ -358,7 +372,7 @@ impl SelfCollisionResponse {
     }
 
     /// One Gauss–Seidel pass of inelastic impulses over the impacts of the current velocities; returns
-    /// how many impacts it answered.
+    /// how many impacts it answered, and how many it found among immovable particles only.
     fn impact_pass(
         &mut self,
         settings: &SelfCollision,
@@ -367,10 +381,10 @@ impl SelfCollisionResponse {
         v: &mut [DVec3],
         inv_mass: &[f64],
         triangles: &[[u32; 3]],
-    ) -> usize {
+    ) -> (usize, usize) {
         self.predict(x0, v, h);
         self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
-        let mut found = 0;
+        let (mut found, mut immovable) = (0, 0);
         let delta = settings.impact_distance;
         for k in 0..self.broad.vertex_triangle_pairs().len() {
             let pair = self.broad.vertex_triangle_pairs()[k];
@@ -379,8 +393,11 @@ impl SelfCollisionResponse {
             let ids = [p, a, b, c];
             let end = ids.map(|i| x0[i] + v[i] * h);
             if let Some(hit) = vertex_triangle_contact(ids.map(|i| x0[i]), end, delta) {
-                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
-                found += 1;
+                if hit.answer(ids, v, inv_mass, h, delta, settings.friction) {
+                    found += 1;
+                } else {
+                    immovable += 1;
+                }
             }
         }
         for k in 0..self.broad.edge_edge_pairs().len() {
@@ -389,11 +406,14 @@ impl SelfCollisionResponse {
             let ids = [a0, a1, b0, b1];
             let end = ids.map(|i| x0[i] + v[i] * h);
             if let Some(hit) = edge_edge_contact(ids.map(|i| x0[i]), end, delta) {
-                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
-                found += 1;
+                if hit.answer(ids, v, inv_mass, h, delta, settings.friction) {
+                    found += 1;
+                } else {
+                    immovable += 1;
+                }
             }
         }
-        found
+        (found, immovable)
     }
 
     /// The fail-safe: grows rigid impact zones until the step has no impact left (module docs).
@@ -633,8 +653,26 @@ impl Hit {
     /// that become coplanar exactly at the end of the step (an obstacle's projection puts two layers
     /// on its surface) have that instant at t = 1, where rounding can hide the cubic's root; left
     /// alone, they would start the next step touching, which no impulse can undo.
-    fn answer(&self, ids: [usize; 4], v: &mut [DVec3], inv_mass: &[f64], h: f64, delta: f64, friction: f64) {
+    ///
+    /// Returns false, and changes nothing, when the contact cannot be moved: its particles with weight
+    /// are immovable (inverse mass 0), or so nearly so that the impulse would throw a particle of tiny
+    /// weight away (the inverse mass seen through the weights below 10⁻⁶ of the largest one).
+    fn answer(
+        &self,
+        ids: [usize; 4],
+        v: &mut [DVec3],
+        inv_mass: &[f64],
+        h: f64,
+        delta: f64,
+        friction: f64,
+    ) -> bool {
         let s = Stencil { particles: ids, weights: self.weights, normal: self.normal };
+        let seen: f64 = (0..4).map(|k| self.weights[k].powi(2) * inv_mass[ids[k]]).sum();
+        let scale = (0..4).map(|k| self.weights[k].powi(2)).sum::<f64>()
+            * ids.iter().map(|&i| inv_mass[i]).fold(0.0, f64::max);
+        if !(seen > 1e-6 * scale) {
+            return false;
+        }
         match self.end_gap {
             None => {
                 s.impulse(v, inv_mass, 0.0, friction);
@@ -643,6 +681,7 @@ impl Hit {
                 s.raise(v, inv_mass, (2.0 * delta - gap).max(0.0) / h, friction);
             }
         }
+        true
     }
 }
 

@@ -2,9 +2,9 @@
 //! faithful sail (its velocity-swap response loses the cloth through itself after frame 14, the case
 //! the self-collision issue starts from) and none on a sheet that hangs free.
 
+use anima_cloth::self_collision::SelfCollisionMode;
 use anima_lab::repo::Repo;
 use anima_lab::run::{RunOptions, Silent, run};
-use anima_cloth::self_collision::SelfCollisionMode;
 use anima_scene::{LoadOptions, load};
 
 fn self_intersections(asset: &str) -> usize {

@@ -9,6 +9,5 @@ mod world;
 
 pub use desc::*;
 pub use world::{
-    BuildError, CollisionCounts, Diagnostics, Flex3dWorld, MODERN_THICKNESS_OF_SPACING, NonFiniteError,
-    StepError, SurfaceInfo,
+    BuildError, CollisionCounts, Diagnostics, Flex3dWorld, NonFiniteError, StepError, SurfaceInfo,
 };

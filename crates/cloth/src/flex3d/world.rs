@@ -302,11 +302,6 @@ struct ModernSelfCollision {
     total: SelfCollisionStats,
 }
 
-/// The modern response's cloth thickness, as a fraction of the smallest grid spacing: thin enough that
-/// layers resting at it look like touching sheets, thick enough that a step of a fast surface (the sail
-/// of E-5 moves a tenth of its spacing per step at most) does not reach it.
-pub const MODERN_THICKNESS_OF_SPACING: f64 = 0.1;
-
 impl Flex3dWorld {
     /// Builds the flat surfaces of `scene` (spec S2.3, S5.7) with zero velocity, and the static
     /// colliders from `objects` (the meshes of `scene.objects`, in order).
@@ -417,7 +412,7 @@ impl Flex3dWorld {
         }
         let min_spacing = scene.surfaces.iter().map(|s| s.spacing_m).fold(f64::INFINITY, f64::min);
         let modern = (opts.self_collision == SelfCollisionMode::Modern).then(|| ModernSelfCollision {
-            settings: SelfCollision::with_thickness(MODERN_THICKNESS_OF_SPACING * min_spacing),
+            settings: SelfCollision::for_spacing(min_spacing),
             triangles: surfaces
                 .iter()
                 .flat_map(|s| s.triangles.iter().map(|t| t.map(|i| i + s.offset as u32)))

@@ -9,7 +9,10 @@ use anima_scene::LoadedFlex3d;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
+use super::{
+    CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
+    stability_warning,
+};
 use crate::output::write_atomic;
 
 /// Per-frame measurements (spec F-37).
@@ -53,6 +56,7 @@ pub struct Flex3dDetail {
     pub penetrations: usize,
     pub collisions_with_objects: u64,
     pub collisions_with_surfaces: u64,
+    pub self_collision: SelfCollisionReport,
     pub frame_stats: Vec<FrameStats>,
 }
 
@@ -169,6 +173,10 @@ pub fn run(
             penetrations: world.penetrations(),
             collisions_with_objects: counts.with_objects,
             collisions_with_surfaces: counts.with_surfaces,
+            self_collision: SelfCollisionReport::new(
+                scene.options.self_collision,
+                world.self_collision_stats(),
+            ),
             frame_stats,
         }),
     };
