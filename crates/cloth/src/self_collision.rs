@@ -49,6 +49,7 @@ use anima_geom::self_contact::{edge_edge_proximity, point_triangle_proximity};
 use anima_geom::{DVec3, SelfContactBroadPhase, edge_edge_impact, vertex_triangle_impact};
 use glam::DMat3;
 use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
 
 /// How a model keeps its cloth from passing through itself (and, with several surfaces, through one
 /// another). A closed choice that scene files and `anima run --self-collision` name.
@@ -180,6 +181,36 @@ pub struct SelfCollisionStats {
     /// Particles whose motion over the step the response changed
     /// ([`SelfCollisionResponse::filter_step`] only).
     pub changed_particles: usize,
+    /// Where the time went.
+    pub times: StageTimes,
+}
+
+/// Wall time of the response's stages, summed over the calls.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StageTimes {
+    /// The broad phase of every stage: swept boxes, refitted (or rebuilt) trees, candidate pairs.
+    pub broad_phase: Duration,
+    /// Proximity tests and repulsion impulses.
+    pub proximity: Duration,
+    /// Continuous tests (the coplanarity cubic) and impact impulses, every pass.
+    pub impacts: Duration,
+    /// Rigid impact zones: their detection rounds and rigid velocities (broad phase apart).
+    pub zones: Duration,
+}
+
+impl StageTimes {
+    pub fn total(&self) -> Duration {
+        self.broad_phase + self.proximity + self.impacts + self.zones
+    }
+}
+
+impl std::ops::AddAssign for StageTimes {
+    fn add_assign(&mut self, o: Self) {
+        self.broad_phase += o.broad_phase;
+        self.proximity += o.proximity;
+        self.impacts += o.impacts;
+        self.zones += o.zones;
+    }
 }
 
 impl std::ops::AddAssign for SelfCollisionStats {
@@ -193,6 +224,7 @@ impl std::ops::AddAssign for SelfCollisionStats {
         self.zone_iterations += o.zone_iterations;
         self.froze_everything |= o.froze_everything;
         self.changed_particles += o.changed_particles;
+        self.times += o.times;
     }
 }
 
@@ -219,6 +251,8 @@ pub struct SelfCollisionResponse {
     /// [`SelfCollisionResponse::filter_step`]'s average velocities of the step, before and after.
     step_velocity: Vec<DVec3>,
     filtered_velocity: Vec<DVec3>,
+    /// Time spent in the broad phase during the current call.
+    broad_time: Duration,
 }
 
 /// A contact between four particles: relative velocity Σ wₖ vₖ along `normal` (weights +1 for the
@@ -257,11 +291,13 @@ impl SelfCollisionResponse {
         assert!(v.len() == n && inv_mass.len() == n && x1.len() == n, "one entry per particle");
         let mut stats = SelfCollisionStats::default();
         self.x1.resize(n, DVec3::ZERO);
+        self.broad_time = Duration::ZERO;
+        let started = Instant::now();
 
         // 1. Proximity at x₀, on the pairs of the swept boxes grown by the thickness (a superset of the
         // pairs within the thickness at x₀).
         self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.thickness);
+        self.broad_update(triangles, x0, settings.thickness);
         let target = |gap: f64| (settings.thickness - gap) / settings.repulsion_time_s.max(h);
         for pair in self.broad.vertex_triangle_pairs() {
             let p = pair.vertex as usize;
@@ -300,6 +336,10 @@ impl SelfCollisionResponse {
             }
         }
 
+        let proximity_done = Instant::now();
+        stats.times.proximity = proximity_done - started - self.broad_time;
+        let broad_before = self.broad_time;
+
         // 2. Impact passes. An impact among particles that all have inverse mass 0 (pinned, or held
         // by an object) takes no impulse; it goes straight to the zones, which freeze it.
         let mut clear = false;
@@ -313,6 +353,10 @@ impl SelfCollisionResponse {
             }
         }
 
+        let impacts_done = Instant::now();
+        stats.times.impacts = impacts_done - proximity_done - (self.broad_time - broad_before);
+        let broad_before = self.broad_time;
+
         // 3. Rigid impact zones, unless the last pass found nothing.
         if !clear {
             self.impact_zones(settings, h, x0, v, inv_mass, triangles, &mut stats);
@@ -320,7 +364,16 @@ impl SelfCollisionResponse {
         for i in 0..n {
             x1[i] = x0[i] + v[i] * h;
         }
+        stats.times.zones = impacts_done.elapsed() - (self.broad_time - broad_before);
+        stats.times.broad_phase = self.broad_time;
         stats
+    }
+
+    /// The broad phase over the candidate end positions `self.x1`, timed.
+    fn broad_update(&mut self, triangles: &[[u32; 3]], x0: &[DVec3], thickness: f64) {
+        let started = Instant::now();
+        self.broad.update(triangles, x0, &self.x1, thickness);
+        self.broad_time += started.elapsed();
     }
 
     /// The response on a step a model has already taken, from `x0` to `x1` with end velocities `v1`:
@@ -383,7 +436,7 @@ impl SelfCollisionResponse {
         triangles: &[[u32; 3]],
     ) -> (usize, usize) {
         self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
+        self.broad_update(triangles, x0, settings.impact_distance);
         let (mut found, mut immovable) = (0, 0);
         let delta = settings.impact_distance;
         for k in 0..self.broad.vertex_triangle_pairs().len() {
@@ -503,7 +556,7 @@ impl SelfCollisionResponse {
         triangles: &[[u32; 3]],
     ) {
         self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
+        self.broad_update(triangles, x0, settings.impact_distance);
         self.impacts.clear();
         let delta = settings.impact_distance;
         let still = |ids: &[usize; 4]| ids.iter().all(|&i| v[i] == DVec3::ZERO);
