@@ -84,7 +84,9 @@ fn main() {
     let ms_per_step = |a: Duration, b: Duration| (a - b).as_secs_f64() * 1e3 / steps;
     let (m_off, lo_off, hi_off) = spread(&mut t_off);
     let (m_on, lo_on, hi_on) = spread(&mut t_on);
-    println!("{n} × {n} sheet folded onto itself (0.75 s after its drop), generalised-α at 1/240 s, contacts in the solve;");
+    println!(
+        "{n} × {n} sheet folded onto itself (0.75 s after its drop), generalised-α at 1/240 s, contacts in the solve;"
+    );
     println!("{rounds} alternating rounds of {per_round} steps each.\n");
     println!("| self-collision | median ms/step | min–max | crossings at the end |");
     println!("|---|---|---|---|");

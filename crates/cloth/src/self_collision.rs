@@ -253,6 +253,10 @@ pub struct SelfCollisionResponse {
     filtered_velocity: Vec<DVec3>,
     /// Time spent in the broad phase during the current call.
     broad_time: Duration,
+    /// Velocities at the start of the current stage or pass, and the particles whose velocity it
+    /// changed: the next pass tests only the pairs that hold one of them.
+    v_before: Vec<DVec3>,
+    moved: Vec<bool>,
 }
 
 /// A contact between four particles: relative velocity Σ wₖ vₖ along `normal` (weights +1 for the
@@ -298,6 +302,8 @@ impl SelfCollisionResponse {
         // pairs within the thickness at x₀).
         self.predict(x0, v, h);
         self.broad_update(triangles, x0, settings.thickness);
+        self.v_before.clear();
+        self.v_before.extend_from_slice(v);
         let target = |gap: f64| (settings.thickness - gap) / settings.repulsion_time_s.max(h);
         for pair in self.broad.vertex_triangle_pairs() {
             let p = pair.vertex as usize;
@@ -342,13 +348,41 @@ impl SelfCollisionResponse {
 
         // 2. Impact passes. An impact among particles that all have inverse mass 0 (pinned, or held
         // by an object) takes no impulse; it goes straight to the zones, which freeze it.
+        //
+        // Each pass tests only the pairs that can have changed since they were last tested: a pair
+        // whose four particles kept their velocities moves as it did, so its test would say the same.
+        // The first pass takes the proximity stage's candidates without a particle the repulsion moved
+        // (still candidates: the impact distance is below the thickness) and queries the trees, refitted,
+        // from the moved ones; later passes query from the particles the pass before moved only.
         let mut clear = false;
-        for _ in 0..settings.max_impact_iterations {
+        let mut any_immovable = false;
+        let incremental = settings.impact_distance <= settings.thickness;
+        for pass in 0..settings.max_impact_iterations {
             stats.impact_iterations += 1;
+            self.predict(x0, v, h);
+            if incremental {
+                self.moved.clear();
+                self.moved.extend(v.iter().zip(&self.v_before).map(|(a, b)| a != b));
+                let started = Instant::now();
+                self.broad.update_moved(
+                    triangles,
+                    x0,
+                    &self.x1,
+                    settings.impact_distance,
+                    &self.moved,
+                    pass == 0,
+                );
+                self.broad_time += started.elapsed();
+            } else {
+                self.broad_update(triangles, x0, settings.impact_distance);
+            }
+            self.v_before.clear();
+            self.v_before.extend_from_slice(v);
             let (answered, immovable) = self.impact_pass(settings, h, x0, v, inv_mass, triangles);
             stats.impacts += answered;
+            any_immovable |= immovable > 0;
             if answered == 0 {
-                clear = immovable == 0;
+                clear = !any_immovable;
                 break;
             }
         }
@@ -424,8 +458,9 @@ impl SelfCollisionResponse {
         }
     }
 
-    /// One Gauss–Seidel pass of inelastic impulses over the impacts of the current velocities; returns
-    /// how many impacts it answered, and how many it found among immovable particles only.
+    /// One Gauss–Seidel pass of inelastic impulses over the impacts of the current velocities, among
+    /// the broad phase's candidates (the caller updates it); returns how many impacts it answered, and
+    /// how many it found among immovable particles only.
     fn impact_pass(
         &mut self,
         settings: &SelfCollision,
@@ -435,8 +470,6 @@ impl SelfCollisionResponse {
         inv_mass: &[f64],
         triangles: &[[u32; 3]],
     ) -> (usize, usize) {
-        self.predict(x0, v, h);
-        self.broad_update(triangles, x0, settings.impact_distance);
         let (mut found, mut immovable) = (0, 0);
         let delta = settings.impact_distance;
         for k in 0..self.broad.vertex_triangle_pairs().len() {
@@ -723,7 +756,8 @@ impl Hit {
         let seen: f64 = (0..4).map(|k| self.weights[k].powi(2) * inv_mass[ids[k]]).sum();
         let scale = (0..4).map(|k| self.weights[k].powi(2)).sum::<f64>()
             * ids.iter().map(|&i| inv_mass[i]).fold(0.0, f64::max);
-        if !(seen > 1e-6 * scale) {
+        // `seen` and `scale` are sums of non-negative terms: no NaN unless the inputs hold one.
+        if seen <= 1e-6 * scale {
             return false;
         }
         match self.end_gap {
