@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
+use anima_cloth::self_collision::SelfCollisionMode;
 use anima_geom::DVec3;
 use anima_lab::optimise::{OptimiseOptions, optimise};
 use anima_lab::run::{Detail, Flex3dSwitches, Overrides, RunOptions, SolveOptions, Summary, write_summary};
@@ -129,6 +130,18 @@ enum ContactModeArg {
     InSolve,
 }
 
+/// How the cloth is kept from passing through itself.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SelfCollisionArg {
+    /// The thesis's response: FLEX3D's swept particle–triangle test with its elastic impact (it leaves
+    /// crossings once a sheet folds); none for the Oliveira cloth, as in its thesis.
+    Faithful,
+    /// Repulsion, impact impulses and rigid impact zones after each step: no step ends with a crossing.
+    Modern,
+    /// None: the cloth passes through itself.
+    Off,
+}
+
 /// FLEX3D's friction reading (spec S7.2).
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum FrictionArg {
@@ -179,6 +192,11 @@ struct RunArgs {
     /// Where contact with static objects is answered (FLEX3D and Oliveira scenes).
     #[arg(long, value_enum)]
     contact_mode: Option<ContactModeArg>,
+    /// How the cloth is kept from passing through itself and, with several FLEX3D surfaces, through
+    /// one another (FLEX3D and Oliveira scenes; the scene's `self_collision` option, `faithful` when it
+    /// names none).
+    #[arg(long, value_enum)]
+    self_collision: Option<SelfCollisionArg>,
     /// Time step in seconds (overrides the scene's: DELTA_t, dt_s, a drape's step rule, a figure's
     /// control step).
     #[arg(long)]
@@ -300,6 +318,11 @@ impl RunArgs {
             contact_mode: self.contact_mode.map(|c| match c {
                 ContactModeArg::AfterStep => ContactMode::AfterStep,
                 ContactModeArg::InSolve => ContactMode::InSolve,
+            }),
+            self_collision: self.self_collision.map(|m| match m {
+                SelfCollisionArg::Faithful => SelfCollisionMode::Faithful,
+                SelfCollisionArg::Modern => SelfCollisionMode::Modern,
+                SelfCollisionArg::Off => SelfCollisionMode::Off,
             }),
             flex3d: Flex3dSwitches {
                 friction: self.friction.map(|f| match f {

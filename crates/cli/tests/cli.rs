@@ -226,6 +226,34 @@ fn closed_choices_list_their_values() {
     }
 }
 
+/// Issue #16: `--self-collision` switches E-5's sail from the thesis's response, which the summary
+/// shows passing through itself, to the modern one, which it shows never does (the summary counts at
+/// every frame).
+#[test]
+fn the_sail_with_modern_self_collision_reports_no_self_intersections() {
+    let run = |mode: &str| {
+        let out = temp_dir(&format!("self-collision-{mode}"));
+        let status = anima()
+            .args(["run", "--quiet", "--no-frames", "--no-pictures", "--self-collision", mode, "--out"])
+            .arg(&out)
+            .arg(assets().join("a2-2-vento.par"))
+            .status()
+            .unwrap();
+        assert!(status.success(), "{mode}");
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        std::fs::remove_dir_all(&out).unwrap();
+        summary
+    };
+    let modern = run("modern");
+    assert_eq!(modern["self_intersections"], 0, "{modern}");
+    assert_eq!(modern["self_collision"]["mode"], "modern");
+    assert!(modern["self_collision"]["repulsions"].as_u64().unwrap() > 0, "{modern}");
+    let faithful = run("faithful");
+    assert!(faithful["self_intersections"].as_u64().unwrap() > 0, "{faithful}");
+    assert_eq!(faithful["self_collision"]["mode"], "faithful");
+}
+
 #[test]
 fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
     let sheet = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/standard-sheet-32.ron");

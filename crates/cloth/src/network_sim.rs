@@ -168,9 +168,6 @@ pub struct NetworkSim {
     /// The cloth surface self-collision keeps apart; empty until enabled.
     triangles: Vec<[u32; 3]>,
     self_response: SelfCollisionResponse,
-    /// Average velocities of the step, (x₁ − x₀)/h, before and after the self-collision filter.
-    step_velocity: Vec<DVec3>,
-    filtered_velocity: Vec<DVec3>,
     /// Inverse masses with 0 for pinned particles, as the self-collision response takes them.
     inv_mass: Vec<f64>,
     /// What the self-collision response did at the last step, and summed over the run.
@@ -199,8 +196,6 @@ impl NetworkSim {
             self_collision: None,
             triangles: Vec::new(),
             self_response: SelfCollisionResponse::new(),
-            step_velocity: Vec::new(),
-            filtered_velocity: Vec::new(),
             inv_mass: Vec::new(),
             self_collision_last: SelfCollisionStats::default(),
             self_collision_total: SelfCollisionStats::default(),
@@ -306,46 +301,30 @@ impl NetworkSim {
         Ok(())
     }
 
-    /// The self-collision filter on the step's average velocities v̄ = (x₁ − x₀)/h, which is the motion
-    /// the step made whatever the integrator. The positions become x₀ + h v̄' (the Bridson position
-    /// update: the straight path the response made collision-free), and the end velocity takes the same
-    /// change, v₁ += v̄' − v̄ (for symplectic Euler v₁ = v̄, so it becomes v̄'; generalised-α keeps the
-    /// part of its end velocity that differs from the average). Returns whether any particle changed.
+    /// The self-collision filter on the step just taken ([`SelfCollisionResponse::filter_step`]).
+    /// Returns whether any particle changed.
     fn resolve_self_collisions(&mut self, settings: &SelfCollision) -> bool {
         let n = self.network.n_particles();
-        let h = self.dt;
         if self.inv_mass.len() != n {
             let masses = anima_ode::Linearized::masses(&self.network);
             let pinned = self.network.pinned();
             self.inv_mass = masses.iter().zip(pinned).map(|(m, &p)| if p { 0.0 } else { 1.0 / m }).collect();
         }
+        self.touched.fill(false);
         // After the swap, `scratch` holds the step's start and `state` its end.
-        let (x0, x1) = (&self.scratch.x, &mut self.state.x);
-        self.step_velocity.clear();
-        self.step_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
-        self.filtered_velocity.clear();
-        self.filtered_velocity.extend_from_slice(&self.step_velocity);
-        let stats = self.self_response.apply(
+        let stats = self.self_response.filter_step(
             settings,
-            h,
-            x0,
-            &mut self.filtered_velocity,
+            self.dt,
+            &self.scratch.x,
+            &mut self.state.x,
+            &mut self.state.v,
             &self.inv_mass,
             &self.triangles,
-            x1,
+            &mut self.touched,
         );
         self.self_collision_last = stats;
         self.self_collision_total += stats;
-        let mut any = false;
-        self.touched.fill(false);
-        for (i, (after, before)) in self.filtered_velocity.iter().zip(&self.step_velocity).enumerate() {
-            if after != before {
-                self.state.v[i] += *after - *before;
-                self.touched[i] = true;
-                any = true;
-            }
-        }
-        any
+        stats.changed_particles > 0
     }
 
     /// Pushes particles out of colliders (at their entry point when they crossed the surface during the

@@ -48,6 +48,61 @@
 use anima_geom::self_contact::{edge_edge_proximity, point_triangle_proximity};
 use anima_geom::{DVec3, SelfContactBroadPhase, edge_edge_impact, vertex_triangle_impact};
 use glam::DMat3;
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// How a model keeps its cloth from passing through itself (and, with several surfaces, through one
+/// another). A closed choice that scene files and `anima run --self-collision` name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum SelfCollisionMode {
+    /// The thesis's own response: for FLEX3D, the swept particle–triangle test with the 1-D elastic
+    /// impact (Nedel 1993 §3.5.4), which leaves crossings behind once a sheet folds; Oliveira 2013 has
+    /// none, so for its cloth this is [`SelfCollisionMode::Off`]. The default: faithful first.
+    #[default]
+    Faithful,
+    /// This module's response after the step ([`SelfCollisionResponse`]): a step that starts without
+    /// crossings ends without them.
+    Modern,
+    /// No self-collision at all: the cloth passes through itself freely.
+    Off,
+}
+
+impl SelfCollisionMode {
+    /// Whether this is the default: scene structs skip the field when writing it, so that every scene
+    /// file written before the switch existed is written the same.
+    pub fn is_faithful(&self) -> bool {
+        *self == SelfCollisionMode::Faithful
+    }
+
+    /// The name on the command line: `faithful`, `modern` or `off`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SelfCollisionMode::Faithful => "faithful",
+            SelfCollisionMode::Modern => "modern",
+            SelfCollisionMode::Off => "off",
+        }
+    }
+}
+
+impl std::fmt::Display for SelfCollisionMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for SelfCollisionMode {
+    type Err = String;
+
+    /// `faithful` (also `thesis`), `modern` or `off` (also `none`).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "faithful" | "thesis" => Ok(SelfCollisionMode::Faithful),
+            "modern" => Ok(SelfCollisionMode::Modern),
+            "off" | "none" => Ok(SelfCollisionMode::Off),
+            _ => Err(format!("unknown self-collision mode `{s}`; expected `faithful`, `modern` or `off`")),
+        }
+    }
+}
 
 /// Settings of the self-collision response. Lengths in m, times in s.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,7 +129,20 @@ impl SelfCollision {
     pub fn with_thickness(thickness: f64) -> Self {
         Self { thickness, impact_distance: 0.01 * thickness, ..Self::default() }
     }
+
+    /// The response the models' `Modern` mode uses on a cloth whose smallest rest spacing between
+    /// neighbouring particles is `spacing` (m, or a FLEX3D scene's units): thickness
+    /// [`THICKNESS_OF_SPACING`] times it, the rest as [`SelfCollision::with_thickness`].
+    pub fn for_spacing(spacing: f64) -> Self {
+        Self::with_thickness(THICKNESS_OF_SPACING * spacing)
+    }
 }
+
+/// The models' cloth thickness as a fraction of their smallest particle spacing: thin enough that
+/// layers resting at it look like touching sheets, thick enough that one step of a fast cloth (the
+/// sail of FLEX3D's E-5 moves a tenth of its spacing per step at most) does not cross it. The default
+/// response's 2 mm on a 64 × 64 metre sheet is an eighth of its spacing.
+pub const THICKNESS_OF_SPACING: f64 = 0.1;
 
 impl Default for SelfCollision {
     /// Thickness 2 mm (a few times thinner than a 64 × 64 metre sheet's spacing), friction 0.3,
@@ -110,6 +178,39 @@ pub struct SelfCollisionStats {
     pub zone_iterations: usize,
     /// Whether the last resort (every particle frozen) acted.
     pub froze_everything: bool,
+    /// Particles whose motion over the step the response changed
+    /// ([`SelfCollisionResponse::filter_step`] only).
+    pub changed_particles: usize,
+    /// Where the time went.
+    pub times: StageTimes,
+}
+
+/// Wall time of the response's stages, summed over the calls.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StageTimes {
+    /// The broad phase of every stage: swept boxes, refitted (or rebuilt) trees, candidate pairs.
+    pub broad_phase: Duration,
+    /// Proximity tests and repulsion impulses.
+    pub proximity: Duration,
+    /// Continuous tests (the coplanarity cubic) and impact impulses, every pass.
+    pub impacts: Duration,
+    /// Rigid impact zones: their detection rounds and rigid velocities (broad phase apart).
+    pub zones: Duration,
+}
+
+impl StageTimes {
+    pub fn total(&self) -> Duration {
+        self.broad_phase + self.proximity + self.impacts + self.zones
+    }
+}
+
+impl std::ops::AddAssign for StageTimes {
+    fn add_assign(&mut self, o: Self) {
+        self.broad_phase += o.broad_phase;
+        self.proximity += o.proximity;
+        self.impacts += o.impacts;
+        self.zones += o.zones;
+    }
 }
 
 impl std::ops::AddAssign for SelfCollisionStats {
@@ -122,6 +223,8 @@ impl std::ops::AddAssign for SelfCollisionStats {
         self.frozen_zones += o.frozen_zones;
         self.zone_iterations += o.zone_iterations;
         self.froze_everything |= o.froze_everything;
+        self.changed_particles += o.changed_particles;
+        self.times += o.times;
     }
 }
 
@@ -145,6 +248,15 @@ pub struct SelfCollisionResponse {
     impacts: Vec<[u32; 4]>,
     /// Zones (by root) found colliding with themselves in a round.
     self_impacts: Vec<u32>,
+    /// [`SelfCollisionResponse::filter_step`]'s average velocities of the step, before and after.
+    step_velocity: Vec<DVec3>,
+    filtered_velocity: Vec<DVec3>,
+    /// Time spent in the broad phase during the current call.
+    broad_time: Duration,
+    /// Velocities at the start of the current stage or pass, and the particles whose velocity it
+    /// changed: the next pass tests only the pairs that hold one of them.
+    v_before: Vec<DVec3>,
+    moved: Vec<bool>,
 }
 
 /// A contact between four particles: relative velocity Σ wₖ vₖ along `normal` (weights +1 for the
@@ -183,11 +295,15 @@ impl SelfCollisionResponse {
         assert!(v.len() == n && inv_mass.len() == n && x1.len() == n, "one entry per particle");
         let mut stats = SelfCollisionStats::default();
         self.x1.resize(n, DVec3::ZERO);
+        self.broad_time = Duration::ZERO;
+        let started = Instant::now();
 
         // 1. Proximity at x₀, on the pairs of the swept boxes grown by the thickness (a superset of the
         // pairs within the thickness at x₀).
         self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.thickness);
+        self.broad_update(triangles, x0, settings.thickness);
+        self.v_before.clear();
+        self.v_before.extend_from_slice(v);
         let target = |gap: f64| (settings.thickness - gap) / settings.repulsion_time_s.max(h);
         for pair in self.broad.vertex_triangle_pairs() {
             let p = pair.vertex as usize;
@@ -226,17 +342,54 @@ impl SelfCollisionResponse {
             }
         }
 
-        // 2. Impact passes.
+        let proximity_done = Instant::now();
+        stats.times.proximity = proximity_done - started - self.broad_time;
+        let broad_before = self.broad_time;
+
+        // 2. Impact passes. An impact among particles that all have inverse mass 0 (pinned, or held
+        // by an object) takes no impulse; it goes straight to the zones, which freeze it.
+        //
+        // Each pass tests only the pairs that can have changed since they were last tested: a pair
+        // whose four particles kept their velocities moves as it did, so its test would say the same.
+        // The first pass takes the proximity stage's candidates without a particle the repulsion moved
+        // (still candidates: the impact distance is below the thickness) and queries the trees, refitted,
+        // from the moved ones; later passes query from the particles the pass before moved only.
         let mut clear = false;
-        for _ in 0..settings.max_impact_iterations {
+        let mut any_immovable = false;
+        let incremental = settings.impact_distance <= settings.thickness;
+        for pass in 0..settings.max_impact_iterations {
             stats.impact_iterations += 1;
-            let found = self.impact_pass(settings, h, x0, v, inv_mass, triangles);
-            stats.impacts += found;
-            if found == 0 {
-                clear = true;
+            self.predict(x0, v, h);
+            if incremental {
+                self.moved.clear();
+                self.moved.extend(v.iter().zip(&self.v_before).map(|(a, b)| a != b));
+                let started = Instant::now();
+                self.broad.update_moved(
+                    triangles,
+                    x0,
+                    &self.x1,
+                    settings.impact_distance,
+                    &self.moved,
+                    pass == 0,
+                );
+                self.broad_time += started.elapsed();
+            } else {
+                self.broad_update(triangles, x0, settings.impact_distance);
+            }
+            self.v_before.clear();
+            self.v_before.extend_from_slice(v);
+            let (answered, immovable) = self.impact_pass(settings, h, x0, v, inv_mass, triangles);
+            stats.impacts += answered;
+            any_immovable |= immovable > 0;
+            if answered == 0 {
+                clear = !any_immovable;
                 break;
             }
         }
+
+        let impacts_done = Instant::now();
+        stats.times.impacts = impacts_done - proximity_done - (self.broad_time - broad_before);
+        let broad_before = self.broad_time;
 
         // 3. Rigid impact zones, unless the last pass found nothing.
         if !clear {
@@ -245,6 +398,57 @@ impl SelfCollisionResponse {
         for i in 0..n {
             x1[i] = x0[i] + v[i] * h;
         }
+        stats.times.zones = impacts_done.elapsed() - (self.broad_time - broad_before);
+        stats.times.broad_phase = self.broad_time;
+        stats
+    }
+
+    /// The broad phase over the candidate end positions `self.x1`, timed.
+    fn broad_update(&mut self, triangles: &[[u32; 3]], x0: &[DVec3], thickness: f64) {
+        let started = Instant::now();
+        self.broad.update(triangles, x0, &self.x1, thickness);
+        self.broad_time += started.elapsed();
+    }
+
+    /// The response on a step a model has already taken, from `x0` to `x1` with end velocities `v1`:
+    /// filters the step's average velocities v̄ = (x₁ − x₀)/h (the motion the step made, whatever the
+    /// integrator), puts the positions at x₀ + h v̄' (the Bridson position update: the straight path
+    /// the response made collision-free) and gives the end velocity the same change, v₁ += v̄' − v̄ (for
+    /// symplectic Euler v₁ = v̄, so it becomes v̄'; other methods keep the part of their end velocity
+    /// that differs from the average). Marks in `touched` the particles it changed (and leaves the
+    /// others as they were), so that the caller can reset a multistep history for them.
+    ///
+    /// # Panics
+    /// As [`SelfCollisionResponse::apply`], and if `touched` has not one entry per particle.
+    #[expect(clippy::too_many_arguments, reason = "the state of a step, each slice one physical field")]
+    pub fn filter_step(
+        &mut self,
+        settings: &SelfCollision,
+        h: f64,
+        x0: &[DVec3],
+        x1: &mut [DVec3],
+        v1: &mut [DVec3],
+        inv_mass: &[f64],
+        triangles: &[[u32; 3]],
+        touched: &mut [bool],
+    ) -> SelfCollisionStats {
+        assert!(v1.len() == x0.len() && touched.len() == x0.len(), "one entry per particle");
+        let mut step_velocity = std::mem::take(&mut self.step_velocity);
+        let mut filtered = std::mem::take(&mut self.filtered_velocity);
+        step_velocity.clear();
+        step_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
+        filtered.clear();
+        filtered.extend_from_slice(&step_velocity);
+        let mut stats = self.apply(settings, h, x0, &mut filtered, inv_mass, triangles, x1);
+        for (i, (after, before)) in filtered.iter().zip(&step_velocity).enumerate() {
+            if after != before {
+                v1[i] += *after - *before;
+                touched[i] = true;
+                stats.changed_particles += 1;
+            }
+        }
+        self.step_velocity = step_velocity;
+        self.filtered_velocity = filtered;
         stats
     }
 
@@ -254,8 +458,9 @@ impl SelfCollisionResponse {
         }
     }
 
-    /// One Gauss–Seidel pass of inelastic impulses over the impacts of the current velocities; returns
-    /// how many impacts it answered.
+    /// One Gauss–Seidel pass of inelastic impulses over the impacts of the current velocities, among
+    /// the broad phase's candidates (the caller updates it); returns how many impacts it answered, and
+    /// how many it found among immovable particles only.
     fn impact_pass(
         &mut self,
         settings: &SelfCollision,
@@ -264,10 +469,8 @@ impl SelfCollisionResponse {
         v: &mut [DVec3],
         inv_mass: &[f64],
         triangles: &[[u32; 3]],
-    ) -> usize {
-        self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
-        let mut found = 0;
+    ) -> (usize, usize) {
+        let (mut found, mut immovable) = (0, 0);
         let delta = settings.impact_distance;
         for k in 0..self.broad.vertex_triangle_pairs().len() {
             let pair = self.broad.vertex_triangle_pairs()[k];
@@ -276,8 +479,11 @@ impl SelfCollisionResponse {
             let ids = [p, a, b, c];
             let end = ids.map(|i| x0[i] + v[i] * h);
             if let Some(hit) = vertex_triangle_contact(ids.map(|i| x0[i]), end, delta) {
-                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
-                found += 1;
+                if hit.answer(ids, v, inv_mass, h, delta, settings.friction) {
+                    found += 1;
+                } else {
+                    immovable += 1;
+                }
             }
         }
         for k in 0..self.broad.edge_edge_pairs().len() {
@@ -286,11 +492,14 @@ impl SelfCollisionResponse {
             let ids = [a0, a1, b0, b1];
             let end = ids.map(|i| x0[i] + v[i] * h);
             if let Some(hit) = edge_edge_contact(ids.map(|i| x0[i]), end, delta) {
-                hit.answer(ids, v, inv_mass, h, delta, settings.friction);
-                found += 1;
+                if hit.answer(ids, v, inv_mass, h, delta, settings.friction) {
+                    found += 1;
+                } else {
+                    immovable += 1;
+                }
             }
         }
-        found
+        (found, immovable)
     }
 
     /// The fail-safe: grows rigid impact zones until the step has no impact left (module docs).
@@ -380,7 +589,7 @@ impl SelfCollisionResponse {
         triangles: &[[u32; 3]],
     ) {
         self.predict(x0, v, h);
-        self.broad.update(triangles, x0, &self.x1, settings.impact_distance);
+        self.broad_update(triangles, x0, settings.impact_distance);
         self.impacts.clear();
         let delta = settings.impact_distance;
         let still = |ids: &[usize; 4]| ids.iter().all(|&i| v[i] == DVec3::ZERO);
@@ -530,8 +739,27 @@ impl Hit {
     /// that become coplanar exactly at the end of the step (an obstacle's projection puts two layers
     /// on its surface) have that instant at t = 1, where rounding can hide the cubic's root; left
     /// alone, they would start the next step touching, which no impulse can undo.
-    fn answer(&self, ids: [usize; 4], v: &mut [DVec3], inv_mass: &[f64], h: f64, delta: f64, friction: f64) {
+    ///
+    /// Returns false, and changes nothing, when the contact cannot be moved: its particles with weight
+    /// are immovable (inverse mass 0), or so nearly so that the impulse would throw a particle of tiny
+    /// weight away (the inverse mass seen through the weights below 10⁻⁶ of the largest one).
+    fn answer(
+        &self,
+        ids: [usize; 4],
+        v: &mut [DVec3],
+        inv_mass: &[f64],
+        h: f64,
+        delta: f64,
+        friction: f64,
+    ) -> bool {
         let s = Stencil { particles: ids, weights: self.weights, normal: self.normal };
+        let seen: f64 = (0..4).map(|k| self.weights[k].powi(2) * inv_mass[ids[k]]).sum();
+        let scale = (0..4).map(|k| self.weights[k].powi(2)).sum::<f64>()
+            * ids.iter().map(|&i| inv_mass[i]).fold(0.0, f64::max);
+        // `seen` and `scale` are sums of non-negative terms: no NaN unless the inputs hold one.
+        if seen <= 1e-6 * scale {
+            return false;
+        }
         match self.end_gap {
             None => {
                 s.impulse(v, inv_mass, 0.0, friction);
@@ -540,6 +768,7 @@ impl Hit {
                 s.raise(v, inv_mass, (2.0 * delta - gap).max(0.0) / h, friction);
             }
         }
+        true
     }
 }
 

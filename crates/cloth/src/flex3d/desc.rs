@@ -6,6 +6,7 @@ use anima_ode::Integrator;
 use serde::{Deserialize, Serialize};
 
 use crate::contact_mode::ContactMode;
+use crate::self_collision::SelfCollisionMode;
 
 /// Standard gravity as FLEX3D scenes use it: (0, −9.8, 0), y up (spec S3.1).
 pub const FLEX3D_GRAVITY: DVec3 = DVec3::new(0.0, -9.8, 0.0);
@@ -170,6 +171,13 @@ pub struct ModelOptions {
     /// contact would pull (an anima extension). Contacts between surfaces stay after the step either way.
     #[serde(skip_serializing_if = "ContactMode::is_after_step")]
     pub object_contact: ContactMode,
+    /// How surfaces are kept from passing through themselves and one another: the thesis's swept
+    /// particle–triangle test with its elastic impact (`Faithful`, the default), the modern response of
+    /// [`crate::self_collision`] after the step (`Modern`: repulsion, impact impulses, rigid impact
+    /// zones; no step ends with a crossing), or nothing (`Off`). Static objects keep the response set
+    /// above either way. Needs `collisions`; not written when it is the default.
+    #[serde(skip_serializing_if = "SelfCollisionMode::is_faithful")]
+    pub self_collision: SelfCollisionMode,
 }
 
 impl ModelOptions {
@@ -185,6 +193,7 @@ impl ModelOptions {
             translation: TranslationMode::Continuous,
             friction_clamp: false,
             object_contact: ContactMode::AfterStep,
+            self_collision: SelfCollisionMode::Faithful,
         }
     }
 }

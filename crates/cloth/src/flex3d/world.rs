@@ -10,6 +10,7 @@ use super::desc::{
 use super::forces::{SurfaceForces, acceleration_with_friction, add_bending_forces, add_spring_forces};
 use super::solve_contact::{StaticContacts, THICKNESS_OF_SPACING};
 use crate::contact_mode::ContactMode;
+use crate::self_collision::{SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats};
 use anima_geom::self_contact::point_triangle_proximity;
 
 /// Why a scene could not be turned into a world.
@@ -399,6 +400,20 @@ pub struct Flex3dWorld {
     contact_thickness: f64,
     /// Per particle, whether this step's collision pass or constraints changed it after the integrator.
     touched: Vec<bool>,
+    /// The modern response between surfaces (`SelfCollisionMode::Modern`), when the scene asks for it.
+    modern: Option<ModernSelfCollision>,
+}
+
+/// What the modern self-collision response of a world keeps: its settings, every surface's triangles
+/// in world particle indices (one list, so surfaces are kept apart from one another too), the inverse
+/// masses (0 for pinned particles), its scratch and what it did.
+#[derive(Debug)]
+struct ModernSelfCollision {
+    settings: SelfCollision,
+    triangles: Vec<[u32; 3]>,
+    inv_mass: Vec<f64>,
+    response: SelfCollisionResponse,
+    total: SelfCollisionStats,
 }
 
 impl Flex3dWorld {
@@ -506,6 +521,20 @@ impl Flex3dWorld {
             model.masses = mass.clone();
             model.list_springs();
         }
+        if opts.self_collision == SelfCollisionMode::Modern && !opts.collisions {
+            return Err(bad("the modern self-collision response needs collisions on"));
+        }
+        let min_spacing = scene.surfaces.iter().map(|s| s.spacing_m).fold(f64::INFINITY, f64::min);
+        let modern = (opts.self_collision == SelfCollisionMode::Modern).then(|| ModernSelfCollision {
+            settings: SelfCollision::for_spacing(min_spacing),
+            triangles: surfaces
+                .iter()
+                .flat_map(|s| s.triangles.iter().map(|t| t.map(|i| i + s.offset as u32)))
+                .collect(),
+            inv_mass: mass.iter().zip(&model.pinned).map(|(m, &p)| if p { 0.0 } else { 1.0 / m }).collect(),
+            response: SelfCollisionResponse::new(),
+            total: SelfCollisionStats::default(),
+        });
         let mut colliders = Colliders::default();
         if opts.collisions {
             for mesh in &objects {
@@ -544,9 +573,9 @@ impl Flex3dWorld {
             step: 0,
             counts: CollisionCounts::default(),
             friction: scene.friction.coefficient,
-            contact_thickness: THICKNESS_OF_SPACING
-                * scene.surfaces.iter().map(|s| s.spacing_m).fold(f64::INFINITY, f64::min),
+            contact_thickness: THICKNESS_OF_SPACING * min_spacing,
             touched: vec![false; n],
+            modern,
         })
     }
 
@@ -592,8 +621,24 @@ impl Flex3dWorld {
         self.counts
     }
 
+    /// What the modern self-collision response did over the run; `None` unless the scene asks for it.
+    pub fn self_collision_stats(&self) -> Option<SelfCollisionStats> {
+        self.modern.as_ref().map(|m| m.total)
+    }
+
+    /// Every surface's triangles in world particle indices, surface after surface: the mesh whose
+    /// crossings with itself (a surface through itself or through another) count as self-intersections.
+    pub fn all_triangles(&self) -> Vec<[u32; 3]> {
+        self.surfaces
+            .iter()
+            .flat_map(|info| info.triangles.iter().map(|t| t.map(|i| i + info.offset as u32)))
+            .collect()
+    }
+
     /// Advances one step of Δt with the scene's integrator: tentative state from the integrator, then
-    /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4).
+    /// prescribed motion of pinned particles, then the collision pass over free particles (spec S4.4);
+    /// with `ModelOptions::self_collision` = `Modern`, that pass tests static objects only and the
+    /// modern response keeps the surfaces apart after it.
     ///
     /// With `ModelOptions::object_contact` = `InSolve`, contacts with static objects are constrained inside the
     /// implicit step instead, and the collision pass tests the surfaces only.
@@ -626,10 +671,23 @@ impl Flex3dWorld {
                 }
             }
         }
-        if self.options.collisions && self.colliders.corners.len() > self.colliders.n_static {
-            self.collide(!in_solve);
-        } else if self.options.collisions && !in_solve && !self.colliders.corners.is_empty() {
-            self.collide(true);
+        let surfaces = self.options.self_collision == SelfCollisionMode::Faithful
+            && self.colliders.corners.len() > self.colliders.n_static;
+        if self.options.collisions && (surfaces || (!in_solve && self.colliders.n_static > 0)) {
+            self.collide(!in_solve, surfaces);
+        }
+        if let Some(m) = &mut self.modern {
+            let stats = m.response.filter_step(
+                &m.settings,
+                self.dt,
+                &self.now.x,
+                &mut self.next.x,
+                &mut self.next.v,
+                &m.inv_mass,
+                &m.triangles,
+                &mut self.touched,
+            );
+            m.total += stats;
         }
         // A multistep method's history no longer describes the motion after a velocity jump (spec
         // S4.2.3: restart after any collision response or constraint discontinuity); generalised-α forgets
@@ -676,8 +734,9 @@ impl Flex3dWorld {
     /// static objects and surfaces alike (surfaces at their start-of-step positions); the first hit
     /// (smallest segment parameter, then lowest triangle index) is answered with a 1-D elastic impact, and
     /// the particle stays where it was at the start of the step. Without `static_objects` only the
-    /// surfaces' triangles are tested (the static ones are the implicit solve's).
-    fn collide(&mut self, static_objects: bool) {
+    /// surfaces' triangles are tested (the static ones are the implicit solve's); without `surfaces`
+    /// only the static ones (the surfaces are the modern response's, or pass through one another).
+    fn collide(&mut self, static_objects: bool, surfaces: bool) {
         let Self { colliders, now, next, model, mass, options, counts, touched, .. } = self;
         let (x, x_new, v_new) = (&now.x, &mut next.x, &mut next.v);
         #[cfg(test)]
@@ -695,10 +754,13 @@ impl Flex3dWorld {
             ..
         } = colliders;
         let n_static = *n_static;
-        for t in n_static..corners.len() {
-            boxes[t] = Aabb::from_points(corners[t].map(|i| x[i as usize]));
+        let last = if surfaces { corners.len() } else { n_static };
+        if surfaces {
+            for t in n_static..corners.len() {
+                boxes[t] = Aabb::from_points(corners[t].map(|i| x[i as usize]));
+            }
+            surface_bins.begin(&boxes[n_static..], &corners[n_static..], x, static_grid, static_corners);
         }
-        surface_bins.begin(&boxes[n_static..], &corners[n_static..], x, static_grid, static_corners);
         let SurfaceBins {
             grid: surface_grid, prepared, prepared_in, pass, anchor, clearance, skipped, ..
         } = surface_bins;
@@ -713,8 +775,9 @@ impl Flex3dWorld {
             if dir == DVec3::ZERO {
                 continue;
             }
-            // A path within its particle's clearance cannot meet a triangle (see `SurfaceBins`).
-            if !brute_force && o.distance(anchor[p]) + dir.length() < clearance[p] {
+            // A path within its particle's clearance cannot meet a triangle (see `SurfaceBins`; the
+            // clearances are kept only while the surfaces are tested).
+            if surfaces && !brute_force && o.distance(anchor[p]) + dir.length() < clearance[p] {
                 *skipped += 1;
                 continue;
             }
@@ -748,12 +811,14 @@ impl Flex3dWorld {
             };
             if brute_force {
                 let first = if static_objects { 0 } else { n_static };
-                (first..corners.len()).for_each(&mut test);
+                (first..last).for_each(&mut test);
             } else {
                 if n_static > 0 && static_objects {
                     static_grid.query(&seg, &mut test);
                 }
-                surface_grid.query(&seg, |t| test(t + n_static));
+                if surfaces {
+                    surface_grid.query(&seg, |t| test(t + n_static));
+                }
             }
             let Some((_, t, bary)) = best else { continue };
             let v_tilde = v_new[p];

@@ -16,6 +16,7 @@ use super::material::Material;
 use super::scene::{Centre, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
 use super::springs::Springs;
 use crate::contact_mode::ContactMode;
+use crate::self_collision::{SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats};
 
 /// Why a scene could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -82,6 +83,23 @@ pub struct OliveiraCloth {
     /// Edges cast at the end of every step and answered on both ends: the adaptive remesher
     /// sets them to the edges it may no longer refine. Empty for a static mesh.
     repelled_edges: Vec<[u32; 2]>,
+    /// The modern self-collision response (`Options::self_collision` = `Modern`), its settings for the
+    /// current mesh (the thickness follows the shortest rest edge), which particles it changed in the
+    /// last step, and what it did over the run.
+    self_collision: Option<SelfCollision>,
+    self_response: SelfCollisionResponse,
+    self_touched: Vec<bool>,
+    /// The inverse masses the response sees: 0 for particles an object answered this step.
+    self_inv_mass: Vec<f64>,
+    self_total: SelfCollisionStats,
+}
+
+/// The modern response's settings for `mesh`, when `options` ask for it.
+fn self_collision_for(options: &Options, mesh: &MaterialMesh) -> Option<SelfCollision> {
+    (options.self_collision == SelfCollisionMode::Modern).then(|| {
+        let shortest = mesh.edge_rest_lengths().into_iter().fold(f64::INFINITY, f64::min);
+        SelfCollision::for_spacing(shortest)
+    })
 }
 
 fn field(field: &'static str, message: impl Into<String>) -> BuildError {
@@ -292,6 +310,11 @@ impl OliveiraCloth {
             first_collision: None,
             total_hits: 0,
             repelled_edges: Vec::new(),
+            self_collision: self_collision_for(&scene.options, &mesh),
+            self_response: SelfCollisionResponse::new(),
+            self_touched: vec![false; n_vertices],
+            self_inv_mass: Vec::new(),
+            self_total: SelfCollisionStats::default(),
             mesh,
             model,
         })
@@ -382,12 +405,36 @@ impl OliveiraCloth {
         self.finish_step(dt, hits)
     }
 
-    /// Checks finiteness and makes the tentative state the current one.
+    /// Checks finiteness, keeps the cloth from passing through itself (with the modern response), and
+    /// makes the tentative state the current one.
     fn finish_step(&mut self, dt: f64, hits: usize) -> Result<StepReport, StepError> {
         if let Some(vertex) =
             (0..self.next.x.len()).find(|&i| !(self.next.x[i].is_finite() && self.next.v[i].is_finite()))
         {
             return Err(StepError::NonFinite { step: self.steps + 1, time: self.time + dt, vertex });
+        }
+        if let Some(settings) = &self.self_collision {
+            self.self_touched.fill(false);
+            // A particle an object answered this step is held by it: the response moves the layers
+            // around it instead, or it would push the particle back into the object.
+            self.self_inv_mass.clear();
+            self.self_inv_mass.extend(
+                self.model.inv_mass.iter().zip(&self.responded).map(|(&w, &held)| if held { 0.0 } else { w }),
+            );
+            let stats = self.self_response.filter_step(
+                settings,
+                dt,
+                &self.now.x,
+                &mut self.next.x,
+                &mut self.next.v,
+                &self.self_inv_mass,
+                self.mesh.triangles(),
+                &mut self.self_touched,
+            );
+            self.self_total += stats;
+            if stats.changed_particles > 0 {
+                self.stepper.reset_history_of(&self.self_touched);
+            }
         }
         std::mem::swap(&mut self.now, &mut self.next);
         self.time += dt;
@@ -524,6 +571,11 @@ impl OliveiraCloth {
         self.total_hits
     }
 
+    /// What the modern self-collision response did over the run; `None` unless the scene asks for it.
+    pub fn self_collision_stats(&self) -> Option<SelfCollisionStats> {
+        self.self_collision.map(|_| self.self_total)
+    }
+
     /// Index of particle P.
     pub fn tracked_vertex(&self) -> usize {
         self.tracked
@@ -600,6 +652,9 @@ impl OliveiraCloth {
         self.solve_cache.reset(n);
         self.tracked = tracked;
         self.repelled_edges.clear();
+        // The new triangles make the response's broad phase rebuild its trees at its next update.
+        self.self_collision = self_collision_for(&self.options, &mesh);
+        self.self_touched = vec![false; n];
         self.mesh = mesh;
     }
 

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::material::Material;
 use crate::contact_mode::ContactMode;
+use crate::self_collision::SelfCollisionMode;
 
 /// Gravity in every Oliveira test: (0, 0, −9.81) m/s², z up (Tables 5.1, 5.3, 5.5).
 pub const OLIVEIRA_GRAVITY: DVec3 = DVec3::new(0.0, 0.0, -9.81);
@@ -213,6 +214,12 @@ pub struct Options {
     /// `recheck_corrected_path`, `edge_contacts`) do not apply to it. Not written when it is the default.
     #[serde(skip_serializing_if = "ContactMode::is_after_step")]
     pub contact: ContactMode,
+    /// Whether the cloth is kept from passing through itself: the thesis has no self-collision, so
+    /// `Faithful` (the default) and `Off` let it; `Modern` runs [`crate::self_collision`]'s response
+    /// after every step (after the contacts with the objects), so that no step ends with a crossing.
+    /// Not written when it is the default.
+    #[serde(skip_serializing_if = "SelfCollisionMode::is_faithful")]
+    pub self_collision: SelfCollisionMode,
 }
 
 impl Options {
@@ -228,6 +235,7 @@ impl Options {
             cull_collision_tests: true,
             strain_limit: None,
             contact: ContactMode::AfterStep,
+            self_collision: SelfCollisionMode::Faithful,
         }
     }
 }

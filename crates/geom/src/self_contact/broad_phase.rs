@@ -50,6 +50,8 @@ pub struct SelfContactBroadPhase {
     edges: Vec<[u32; 2]>,
     triangle_tree: Bvh,
     edge_tree: Bvh,
+    /// Swept vertex boxes, for [`SelfContactBroadPhase::update_moved`]'s queries from the triangles.
+    vertex_tree: Bvh,
     stack: Vec<u32>,
     vertex_triangle: Vec<VertexTrianglePair>,
     edge_edge: Vec<EdgeEdgePair>,
@@ -62,17 +64,9 @@ impl SelfContactBroadPhase {
         Self { rebuild: true, ..Self::default() }
     }
 
-    /// Finds the candidate pairs of the step that moves vertex i linearly from `start[i]` to `end[i]`,
-    /// for cloth of the given thickness (m): every vertex–triangle and edge–edge pair without a shared
-    /// vertex that comes within `thickness` during the step is among them.
-    ///
-    /// The trees are rebuilt when `triangles` differs from the previous call's (remeshing) or after
-    /// [`request_rebuild`](Self::request_rebuild), and refitted otherwise.
-    ///
-    /// # Panics
-    /// If `start` and `end` differ in length, a triangle names a vertex outside them, or the thickness
-    /// is negative or not finite.
-    pub fn update(&mut self, triangles: &[[u32; 3]], start: &[DVec3], end: &[DVec3], thickness: f64) {
+    /// The swept boxes of the step, grown by half the thickness, and the trees over them (rebuilt when
+    /// the triangles changed, refitted otherwise).
+    fn fit(&mut self, triangles: &[[u32; 3]], start: &[DVec3], end: &[DVec3], thickness: f64) {
         assert_eq!(start.len(), end.len(), "start and end positions must have one entry per vertex");
         assert!(thickness >= 0.0 && thickness.is_finite(), "thickness must be finite and non-negative");
         if self.triangles != triangles {
@@ -93,38 +87,131 @@ impl SelfContactBroadPhase {
             let [[a0, a1], [b0, b1]] = e.map(swept);
             grown(Aabb::from_points([a0, a1, b0, b1]), pad)
         }));
+        self.vertex_tree.boxes.clear();
+        self.vertex_tree
+            .boxes
+            .extend(start.iter().zip(end).map(|(&x0, &x1)| grown(Aabb::from_points([x0, x1]), pad)));
         if self.rebuild {
             self.triangle_tree.build();
             self.edge_tree.build();
+            self.vertex_tree.build();
             self.rebuild = false;
         } else {
             self.triangle_tree.refit();
             self.edge_tree.refit();
+            self.vertex_tree.refit();
+        }
+    }
+
+    /// Finds the candidate pairs of the step that moves vertex i linearly from `start[i]` to `end[i]`,
+    /// for cloth of the given thickness (m): every vertex–triangle and edge–edge pair without a shared
+    /// vertex that comes within `thickness` during the step is among them.
+    ///
+    /// The trees are rebuilt when `triangles` differs from the previous call's (remeshing) or after
+    /// [`request_rebuild`](Self::request_rebuild), and refitted otherwise.
+    ///
+    /// # Panics
+    /// If `start` and `end` differ in length, a triangle names a vertex outside them, or the thickness
+    /// is negative or not finite.
+    pub fn update(&mut self, triangles: &[[u32; 3]], start: &[DVec3], end: &[DVec3], thickness: f64) {
+        self.fit(triangles, start, end, thickness);
+        self.vertex_triangle.clear();
+        for v in 0..start.len() as u32 {
+            self.query_vertex(v);
         }
 
-        self.vertex_triangle.clear();
-        for (v, (&x0, &x1)) in start.iter().zip(end).enumerate() {
-            let vertex = v as u32;
-            let query = grown(Aabb::from_points([x0, x1]), pad);
-            let (triangles, pairs) = (&self.triangles, &mut self.vertex_triangle);
-            self.triangle_tree.query(&query, &mut self.stack, |t| {
-                if !triangles[t as usize].contains(&vertex) {
+        self.edge_edge.clear();
+        for e in 0..self.edges.len() {
+            self.query_edge(e, |_, f| f > e);
+        }
+    }
+
+    /// The candidate pairs of a step whose trajectories differ from the previous update's only at the
+    /// vertices marked in `moved` (and the thickness may differ): the pairs with at least one moved
+    /// vertex, found by querying from the moved vertices, the triangles and the edges that hold one.
+    /// With `keep`, the previous update's pairs without a moved vertex stay too (their swept boxes have
+    /// not changed, so they are still candidates when the thickness has not grown); without it, only
+    /// the new pairs are listed — what a pass needs that has already tested the others on the same
+    /// trajectories. Every pair is listed once; the trees are refitted.
+    ///
+    /// # Panics
+    /// If the triangles are not the previous update's, or as [`update`](Self::update).
+    pub fn update_moved(
+        &mut self,
+        triangles: &[[u32; 3]],
+        start: &[DVec3],
+        end: &[DVec3],
+        thickness: f64,
+        moved: &[bool],
+        keep: bool,
+    ) {
+        assert!(
+            self.triangles == triangles && !self.rebuild,
+            "update_moved follows an update of the same mesh"
+        );
+        assert_eq!(moved.len(), start.len(), "one flag per vertex");
+        self.fit(triangles, start, end, thickness);
+        let moved_edge = |edges: &[[u32; 2]], e: usize| edges[e].iter().any(|&i| moved[i as usize]);
+        if keep {
+            let tris = &self.triangles;
+            let moved_triangle = |t: u32| tris[t as usize].iter().any(|&i| moved[i as usize]);
+            self.vertex_triangle.retain(|p| !moved[p.vertex as usize] && !moved_triangle(p.triangle));
+            self.edge_edge.retain(|p| !p.edges.iter().flatten().any(|&i| moved[i as usize]));
+        } else {
+            self.vertex_triangle.clear();
+            self.edge_edge.clear();
+        }
+        for v in 0..start.len() as u32 {
+            if moved[v as usize] {
+                self.query_vertex(v);
+            }
+        }
+        // A triangle with a moved corner meets the vertices that did not move (the moved ones found it).
+        for t in 0..self.triangles.len() as u32 {
+            let corners = self.triangles[t as usize];
+            if !corners.iter().any(|&i| moved[i as usize]) {
+                continue;
+            }
+            let query = self.triangle_tree.boxes[t as usize];
+            let pairs = &mut self.vertex_triangle;
+            self.vertex_tree.query(&query, &mut self.stack, |vertex| {
+                if !moved[vertex as usize] && !corners.contains(&vertex) {
                     pairs.push(VertexTrianglePair { vertex, triangle: t });
                 }
             });
         }
-
-        self.edge_edge.clear();
-        for (e, &edge) in self.edges.iter().enumerate() {
-            let query = self.edge_tree.boxes[e];
-            let (edges, pairs) = (&self.edges, &mut self.edge_edge);
-            self.edge_tree.query(&query, &mut self.stack, |f| {
-                let other = edges[f as usize];
-                if f as usize > e && !other.contains(&edge[0]) && !other.contains(&edge[1]) {
-                    pairs.push(EdgeEdgePair { edges: [edge, other] });
-                }
-            });
+        for e in 0..self.edges.len() {
+            if moved_edge(&self.edges, e) {
+                // A pair of two moved edges is listed from the one with the smaller index.
+                self.query_edge(e, |edges, f| f > e || !moved_edge(edges, f));
+            }
         }
+    }
+
+    /// Lists the triangles whose boxes overlap vertex `v`'s, not holding it.
+    fn query_vertex(&mut self, vertex: u32) {
+        let query = self.vertex_tree.boxes[vertex as usize];
+        let (triangles, pairs) = (&self.triangles, &mut self.vertex_triangle);
+        self.triangle_tree.query(&query, &mut self.stack, |t| {
+            if !triangles[t as usize].contains(&vertex) {
+                pairs.push(VertexTrianglePair { vertex, triangle: t });
+            }
+        });
+    }
+
+    /// Lists the edges whose boxes overlap edge `e`'s, share no vertex with it and pass `accept`
+    /// (given the edge list and the other edge's index), as pairs ordered by index.
+    fn query_edge(&mut self, e: usize, accept: impl Fn(&[[u32; 2]], usize) -> bool) {
+        let query = self.edge_tree.boxes[e];
+        let edge = self.edges[e];
+        let (edges, pairs) = (&self.edges, &mut self.edge_edge);
+        self.edge_tree.query(&query, &mut self.stack, |f| {
+            let other = edges[f as usize];
+            if accept(edges, f as usize) && !other.contains(&edge[0]) && !other.contains(&edge[1]) {
+                let (first, second) = if (f as usize) > e { (edge, other) } else { (other, edge) };
+                pairs.push(EdgeEdgePair { edges: [first, second] });
+            }
+        });
     }
 
     /// Makes the next [`update`](Self::update) rebuild the trees instead of refitting them: worth
@@ -204,6 +291,64 @@ mod tests {
             assert_eq!(fingerprint(&broad), warm, "step {step}");
             broad.request_rebuild();
         }
+    }
+
+    #[test]
+    fn moved_updates_find_what_a_full_update_finds() {
+        // A wavy sheet folded over onto itself (two layers 0.15 apart), then some vertices given a
+        // different end: the incremental update must list exactly the pairs a full update lists (with
+        // `keep`), or exactly those with a moved vertex (without), each once.
+        let mesh = MaterialMesh::grid(9, 1.0, DiagonalPattern::Alternating).unwrap();
+        let fold = |p: DVec3| {
+            if p.x < 0.5 { p } else { DVec3::new(1.0 - p.x, p.y, 0.15 + 0.02 * (7.0 * p.y).sin()) }
+        };
+        let start: Vec<DVec3> = mesh.place(DVec3::ZERO, DVec3::X, DVec3::Y).into_iter().map(fold).collect();
+        let end: Vec<DVec3> = start.iter().map(|p| *p + DVec3::new(0.01, 0.0, -0.02 * p.z)).collect();
+        let moved: Vec<bool> = (0..start.len()).map(|i| i % 7 == 3 || i % 11 == 0).collect();
+        let end2: Vec<DVec3> =
+            end.iter().zip(&moved).map(|(p, &m)| if m { *p - DVec3::Z * 0.12 } else { *p }).collect();
+        let sorted = |b: &SelfContactBroadPhase| {
+            let mut vt = b.vertex_triangle_pairs().to_vec();
+            let mut ee = b.edge_edge_pairs().to_vec();
+            let (n_vt, n_ee) = (vt.len(), ee.len());
+            vt.sort_unstable();
+            ee.sort_unstable();
+            vt.dedup();
+            ee.dedup();
+            assert_eq!((vt.len(), ee.len()), (n_vt, n_ee), "a pair listed twice");
+            (vt, ee)
+        };
+        let mut full = SelfContactBroadPhase::new();
+        full.update(mesh.triangles(), &start, &end, 0.05);
+        full.update(mesh.triangles(), &start, &end2, 0.03);
+        let (vt_full, ee_full) = sorted(&full);
+
+        let mut kept = SelfContactBroadPhase::new();
+        kept.update(mesh.triangles(), &start, &end, 0.05);
+        kept.update_moved(mesh.triangles(), &start, &end2, 0.03, &moved, true);
+        let (vt_kept, ee_kept) = sorted(&kept);
+        // Kept pairs were found with the thicker pad: a superset, and equal on the moved part.
+        let has_moved_vt = |p: &VertexTrianglePair| {
+            moved[p.vertex as usize]
+                || mesh.triangles()[p.triangle as usize].iter().any(|&i| moved[i as usize])
+        };
+        let has_moved_ee = |p: &EdgeEdgePair| p.edges.iter().flatten().any(|&i| moved[i as usize]);
+        assert!(vt_full.iter().all(|p| vt_kept.binary_search(p).is_ok()));
+        assert!(ee_full.iter().all(|p| ee_kept.binary_search(p).is_ok()));
+        let moved_only = |vt: &[VertexTrianglePair], ee: &[EdgeEdgePair]| {
+            (
+                vt.iter().filter(|p| has_moved_vt(p)).copied().collect::<Vec<_>>(),
+                ee.iter().filter(|p| has_moved_ee(p)).copied().collect::<Vec<_>>(),
+            )
+        };
+        let expected = moved_only(&vt_full, &ee_full);
+        assert!(!expected.0.is_empty() && !expected.1.is_empty(), "the test must move pairs");
+        assert_eq!(moved_only(&vt_kept, &ee_kept), expected);
+
+        let mut fresh = SelfContactBroadPhase::new();
+        fresh.update(mesh.triangles(), &start, &end, 0.05);
+        fresh.update_moved(mesh.triangles(), &start, &end2, 0.03, &moved, false);
+        assert_eq!(sorted(&fresh), expected);
     }
 
     #[test]

@@ -5,8 +5,9 @@
 use std::path::PathBuf;
 
 use anima_cloth::flex3d::mass_spring::{TABLE_4_1_STEPS, TABLE_4_1_THESIS, table_4_1};
-use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dWorld, FrictionMode};
-use anima_geom::DVec3;
+use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dWorld, FrictionMode, ModelOptions};
+use anima_cloth::self_collision::SelfCollisionStats;
+use anima_geom::{DVec3, count_self_intersections};
 use anima_ode::Integrator;
 use anima_scene::{LoadOptions, LoadedFlex3d};
 use anyhow::Result;
@@ -289,24 +290,48 @@ pub struct E5Wind {
     /// Whether particle (9, 9), the free corner, has the largest z at each frame.
     pub free_corner_furthest: Vec<bool>,
     pub min_z: Vec<f64>,
-    /// Self-collision responses up to each frame.
+    /// Self-collision responses up to each frame (the faithful response's).
     pub surface_hits: Vec<u64>,
     pub max_speed_last: f64,
+    /// The most crossing (edge, triangle) pairs of the sheet with itself after any step (not only at
+    /// the frames), and the first step that ended with one.
+    pub most_crossings: usize,
+    pub first_crossing_step: Option<usize>,
+    /// What the modern response did over the run (`None` unless it ran).
+    pub modern: Option<SelfCollisionStats>,
 }
 
+/// E-5 as the thesis ran it, with its faithful self-collision response (`collisions`), or with
+/// collisions off as the spec computed its numbers.
 pub fn e5_wind(collisions: bool) -> Result<E5Wind> {
-    let (loaded, mut world) = ThesisScene::Wind.world(|l| l.scene.options.collisions = collisions)?;
+    e5_wind_with(|o| o.collisions = collisions)
+}
+
+/// E-5 with `edit` applied to the scene's options (the self-collision mode, say).
+pub fn e5_wind_with(edit: impl FnOnce(&mut ModelOptions)) -> Result<E5Wind> {
+    let (loaded, mut world) = ThesisScene::Wind.world(|l| edit(&mut l.scene.options))?;
     let info = world.surfaces()[0].clone();
     let corner = info.grid.index(9, 9);
+    let triangles = world.all_triangles();
     let mut out = E5Wind {
         z_extent: vec![],
         free_corner_furthest: vec![],
         min_z: vec![],
         surface_hits: vec![],
         max_speed_last: 0.0,
+        most_crossings: 0,
+        first_crossing_step: None,
+        modern: None,
     };
     for k in 1..=loaded.scene.n_frames() {
-        run_to_frame(&loaded, &mut world, k)?;
+        while world.steps_taken() < loaded.scene.frame_step(k) {
+            world.step()?;
+            let crossings = count_self_intersections(world.positions(), &triangles);
+            if crossings > 0 {
+                out.first_crossing_step.get_or_insert(world.steps_taken());
+                out.most_crossings = out.most_crossings.max(crossings);
+            }
+        }
         let x = world.surface_positions(0);
         let (lo, hi) =
             x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.z), h.max(p.z)));
@@ -316,6 +341,7 @@ pub fn e5_wind(collisions: bool) -> Result<E5Wind> {
         out.surface_hits.push(world.collision_counts().with_surfaces);
     }
     out.max_speed_last = world.diagnostics().max_speed;
+    out.modern = world.self_collision_stats();
     Ok(out)
 }
 

@@ -9,7 +9,10 @@ use anima_scene::LoadedFlex3d;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
+use super::{
+    CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
+    stability_warning,
+};
 use crate::output::write_atomic;
 
 /// Per-frame measurements (spec F-37).
@@ -53,6 +56,7 @@ pub struct Flex3dDetail {
     pub penetrations: usize,
     pub collisions_with_objects: u64,
     pub collisions_with_surfaces: u64,
+    pub self_collision: SelfCollisionReport,
     pub frame_stats: Vec<FrameStats>,
 }
 
@@ -113,11 +117,7 @@ pub fn run(
     let mut failure = None;
     let mut frames_done = 0;
     // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
-    let triangles: Vec<[u32; 3]> = world
-        .surfaces()
-        .iter()
-        .flat_map(|info| info.triangles.iter().map(|t| t.map(|i| i + info.offset as u32)))
-        .collect();
+    let triangles = world.all_triangles();
     let mut watch = CrossingWatch::default();
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
@@ -173,6 +173,10 @@ pub fn run(
             penetrations: world.penetrations(),
             collisions_with_objects: counts.with_objects,
             collisions_with_surfaces: counts.with_surfaces,
+            self_collision: SelfCollisionReport::new(
+                scene.options.self_collision,
+                world.self_collision_stats(),
+            ),
             frame_stats,
         }),
     };

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FrictionMode, StaticResponse};
 use anima_cloth::oliveira::StepRule;
+use anima_cloth::self_collision::SelfCollisionMode;
 use anima_geom::DVec3;
 use anima_ode::{Integrator, LinearSolver};
 use anima_scene::Scene;
@@ -153,6 +154,32 @@ impl CrossingWatch {
     }
 }
 
+/// How a cloth run kept its cloth from passing through itself: the mode, and what the modern
+/// response did over the run (absent for the other modes).
+#[derive(Debug, Clone, Serialize)]
+pub struct SelfCollisionReport {
+    pub mode: &'static str,
+    pub repulsions: Option<usize>,
+    pub impacts: Option<usize>,
+    pub impact_zones: Option<usize>,
+    pub frozen_zones: Option<usize>,
+}
+
+impl SelfCollisionReport {
+    pub fn new(
+        mode: SelfCollisionMode,
+        stats: Option<anima_cloth::self_collision::SelfCollisionStats>,
+    ) -> Self {
+        Self {
+            mode: mode.name(),
+            repulsions: stats.map(|s| s.repulsions),
+            impacts: stats.map(|s| s.impacts),
+            impact_zones: stats.map(|s| s.zones),
+            frozen_zones: stats.map(|s| s.frozen_zones),
+        }
+    }
+}
+
 /// The numbers only one kind of scene has.
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]
@@ -226,6 +253,8 @@ pub struct Overrides {
     pub gravity: Option<DVec3>,
     /// Where contact with static objects is answered (FLEX3D and Oliveira scenes).
     pub contact_mode: Option<ContactMode>,
+    /// How the cloth is kept from passing through itself (FLEX3D and Oliveira scenes).
+    pub self_collision: Option<SelfCollisionMode>,
     pub flex3d: Flex3dSwitches,
 }
 
@@ -289,6 +318,9 @@ impl Overrides {
                 if let Some(c) = self.contact_mode {
                     s.options.object_contact = c;
                 }
+                if let Some(m) = self.self_collision {
+                    s.options.self_collision = m;
+                }
                 let f = &self.flex3d;
                 if let Some(m) = f.friction {
                     s.friction.mode = m;
@@ -309,6 +341,9 @@ impl Overrides {
             Scene::Sheet(s) => {
                 if self.contact_mode.is_some() {
                     return Err(not_for("--contact-mode (the standard sheets touch no object)"));
+                }
+                if self.self_collision.is_some() {
+                    return Err(not_for("--self-collision (a hanging standard sheet never folds)"));
                 }
                 if self.gravity.is_some() {
                     return Err(not_for(
@@ -342,11 +377,18 @@ impl Overrides {
                 if let Some(c) = self.contact_mode {
                     s.options.contact = c;
                 }
+                if let Some(m) = self.self_collision {
+                    s.options.self_collision = m;
+                }
             }
             Scene::Body(_) | Scene::Character(_) => {
-                if self.integrator.is_some() || self.gravity.is_some() || self.contact_mode.is_some() {
+                if self.integrator.is_some()
+                    || self.gravity.is_some()
+                    || self.contact_mode.is_some()
+                    || self.self_collision.is_some()
+                {
                     return Err(not_for(
-                        "--integrator, --gravity or --contact-mode (a figure's world sets them)",
+                        "--integrator, --gravity, --contact-mode or --self-collision (a figure's world sets them)",
                     ));
                 }
                 let (world, scene_duration) = match scene {

@@ -15,7 +15,7 @@ use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames};
+use super::{CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames};
 use crate::oliveira::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
 
@@ -48,6 +48,7 @@ pub struct OliveiraDetail {
     pub remesh_rebuilds: u64,
     pub remesh_refinements: u64,
     pub remesh_simplifications: u64,
+    pub self_collision: SelfCollisionReport,
 }
 
 /// A frame kept for the contact sheet: time, positions, triangles.
@@ -145,6 +146,10 @@ pub fn run(
             remesh_rebuilds: stats.rebuilds,
             remesh_refinements: stats.refinements,
             remesh_simplifications: stats.simplifications,
+            self_collision: SelfCollisionReport::new(
+                loaded.scene.options.self_collision,
+                c.self_collision_stats(),
+            ),
         }),
     };
     if let Some(dir) = opts.picture_dir() {
