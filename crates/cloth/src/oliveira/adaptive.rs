@@ -119,8 +119,16 @@ pub struct RemeshStats {
     /// sizing field: splits and collapses.
     pub refinements: u64,
     pub simplifications: u64,
-    /// Oliveira: simplifications undone because they did not lower the face count.
-    pub simplifications_undone: u64,
+    /// Oliveira: simplification patches refused by the guard because they did not have fewer faces
+    /// than the region they would replace (the region is left as it was).
+    pub simplifications_refused: u64,
+    /// Oliveira: simplification regions the mesher could not fill within the edge-length rules (also
+    /// counted in `failures`). Attempts are `simplifications + simplifications_refused +
+    /// simplifications_failed`.
+    pub simplifications_failed: u64,
+    /// Oliveira: simplification components not attempted because none of their vertices may be
+    /// removed, so that no patch could have fewer faces (see [`AdaptiveMesh::removable_vertices`]).
+    pub simplifications_skipped: u64,
     /// Components whose remeshing was refused (pinched border, locked vertex inside, mesher failure).
     pub failures: u64,
     /// New particles found inside an object and pushed out.
@@ -466,13 +474,13 @@ fn oliveira_pass(
             RegionRemeshing {
                 density: d0 * p.density_refine,
                 retry: retry_refine,
-                contour: ContourRule::Bisect { min_length: p.min_rest_length },
+                contour: ContourRule::Bisect { min_length: p.min_bisected_length() },
                 improvement_rounds: p.improvement_rounds,
             }
         } else {
             RegionRemeshing {
                 density: d0 * p.density_simplify,
-                retry: RetryRule::simplification(),
+                retry: RetryRule::bounded_simplification(Some(p.short_edge_limit()), Some(p.max_rest_length)),
                 contour: ContourRule::MergeStraight { max_length: p.max_rest_length },
                 improvement_rounds: p.improvement_rounds,
             }
@@ -484,14 +492,32 @@ fn oliveira_pass(
             .map(|(a, b)| (a.min(b), a.max(b)))
             .collect();
         let first_new_face = mesh.log().added_faces.len();
-        // A simplification that does not lower the face count is undone (anima's guard): a flat region
-        // would otherwise be regenerated, to the same size, after every step.
-        let before = (!refining).then(|| mesh.clone());
-        match mesh.remesh_region(faces, &settings) {
-            Ok(_) if before.as_ref().is_some_and(|b| mesh.n_faces() >= b.n_faces()) => {
-                *mesh = before.expect("kept for simplification");
-                stats.simplifications_undone += 1;
+        if !refining && mesh.removable_vertices(faces, settings.contour, p.max_rest_length).is_empty() {
+            // Nothing here may go within L⁰_max, so no patch can have fewer faces: not an attempt.
+            stats.simplifications_skipped += 1;
+            continue;
+        }
+        // A simplification that does not lower the face count is refused and the region restored
+        // (anima's guard): a flat region would otherwise be regenerated, at the same size, after every
+        // pass. With `delay_refused_simplification` its edges then wait t_simp before they are
+        // selected again, as refined edges do.
+        let before = (!refining).then(|| (mesh.clone(), mesh.n_faces()));
+        let result = mesh.remesh_region(faces, &settings);
+        let refused = match (&result, &before) {
+            (Ok(_), Some((_, n_before))) => mesh.n_faces() >= *n_before,
+            _ => false,
+        };
+        if refused {
+            *mesh = before.expect("kept for simplification").0;
+            stats.simplifications_refused += 1;
+        }
+        if !refining && (refused || result.is_err()) && p.delay_refused_simplification {
+            for k in face_edge_keys(mesh, faces) {
+                refined_at.insert(k, t);
             }
+        }
+        match result {
+            _ if refused => {}
             Ok(_) if refining => {
                 stats.refinements += 1;
                 let added = mesh.log().added_faces[first_new_face..].to_vec();
@@ -502,7 +528,12 @@ fn oliveira_pass(
                 }
             }
             Ok(_) => stats.simplifications += 1,
-            Err(_) => stats.failures += 1,
+            Err(_) => {
+                stats.failures += 1;
+                if !refining {
+                    stats.simplifications_failed += 1;
+                }
+            }
         }
     }
     rebuild_from_adaptive(cloth, mesh, Some(refined_at), gravity, stats)
@@ -753,7 +784,7 @@ mod tests {
     fn flat_resting_sheet_coarsens() {
         let mut c = adaptive(9, false, oliveira_every(0.0));
         let (faces, mass) = (c.cloth().mesh().n_faces(), c.total_mass());
-        assert!(c.remesh());
+        assert!(c.remesh(), "{:?}", c.stats());
         let after = c.cloth().mesh().n_faces();
         assert!(after < faces, "{after} faces from {faces}");
         assert!(c.stats().simplifications > 0 && c.stats().refinements == 0, "{:?}", c.stats());
@@ -803,20 +834,25 @@ mod tests {
     #[test]
     fn refinement_respects_the_rest_length_guard() {
         // Repeated folding passes: no edge with L⁰ < L⁰_min is refined, and with the `MinLength` rule no
-        // patch keeps an edge shorter than L⁰_min (contour bisection of an edge ≥ L⁰_min gives ≥ L⁰_min/2).
+        // generated edge is shorter than L⁰_min (a contour edge is bisected only from 2·L⁰_min; a patch
+        // that cannot keep the limit is refused).
+        // On a 9 × 9 sheet with L⁰_min = 7 cm the 12.5 cm contour edges may be refined but not halved
+        // (L⁰_max = 13 cm keeps the curvature limit at 0.97 on these small faces).
         let p = OliveiraRemeshing {
             short_edge: ShortEdgeRule::MinLength,
             simplify: false,
+            min_rest_length: 0.07,
+            max_rest_length: 0.13,
             ..OliveiraRemeshing::test_3()
         };
-        let mut c = adaptive(5, false, AdaptiveMethod::Oliveira(p));
+        let mut c = adaptive(9, false, AdaptiveMethod::Oliveira(p));
         for _ in 0..6 {
             fold(&mut c);
             c.remesh();
         }
         let shortest = min_rest_edge(c.cloth().mesh());
         assert!(c.stats().refinements > 0);
-        assert!(shortest >= 0.5 * p.min_rest_length - 1e-12, "shortest rest edge {shortest}");
+        assert!(shortest >= p.min_rest_length - 1e-12, "shortest rest edge {shortest}");
         c.adaptive_mesh().unwrap().check_invariants().unwrap();
     }
 

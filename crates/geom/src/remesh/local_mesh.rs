@@ -53,6 +53,8 @@ impl LocalMeshParams {
 pub struct HoleMesh {
     pub points: Vec<DVec2>,
     pub n_border: usize,
+    /// Where each border loop starts in `points` (the first at 0).
+    pub loop_starts: Vec<usize>,
     pub triangles: Vec<[u32; 3]>,
 }
 
@@ -110,6 +112,8 @@ pub enum LocalMeshError {
     Stuck(usize),
     #[error("the target size must be positive and finite")]
     BadSize,
+    #[error("no patch passed the retry rule in {0} generations; the hole is refused")]
+    Refused(usize),
 }
 
 /// Signed area of a closed polygon.
@@ -219,12 +223,14 @@ pub fn mesh_hole(loops: &[Vec<DVec2>], params: &LocalMeshParams) -> Result<HoleM
     let mut points: Vec<DVec2> = Vec::new();
     let mut front: Vec<(u32, u32)> = Vec::new();
     let mut total = 0.0;
+    let mut loop_starts = Vec::with_capacity(loops.len());
     for (i, l) in loops.iter().enumerate() {
         if l.len() < 3 || l.iter().any(|p| !p.is_finite()) {
             return Err(LocalMeshError::BadBorder(i));
         }
         let base = points.len() as u32;
         let n = l.len() as u32;
+        loop_starts.push(points.len());
         points.extend_from_slice(l);
         front.extend((0..n).map(|k| (base + k, base + (k + 1) % n)));
         total += polygon_area(l);
@@ -419,7 +425,7 @@ pub fn mesh_hole(loops: &[Vec<DVec2>], params: &LocalMeshParams) -> Result<HoleM
             }
         }
     }
-    let mut mesh = HoleMesh { points, n_border, triangles };
+    let mut mesh = HoleMesh { points, n_border, loop_starts, triangles };
     for _ in 0..params.improvement_rounds {
         delaunay_flips(&mut mesh);
         smooth(&mut mesh);
@@ -543,29 +549,100 @@ pub fn ear_clip(points: &[DVec2]) -> Option<Vec<[u32; 3]>> {
     Some(tris)
 }
 
-/// The retry rule of spec §6.6/§6.8, for refinement.
+/// The retry rule of spec §6.6/§6.8, and the edge-length bounds every accepted patch keeps.
+///
+/// The bounds apply to the edges the mesher *generates*: every edge of the patch except the hole's
+/// border edges, which exist before the patch and which no density can change (a check that counted
+/// them would fail on every try once a short edge sits on the border, and so could never be met).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RetryRule {
     /// Refinement must create at least one interior vertex; if not, d ×= `factor`.
     pub require_interior_vertex: bool,
-    /// A patch with an edge shorter than this is redone with d ÷= `factor` (the spec's switch between
-    /// the literal "(L⁰_min)²" and "L⁰_min" is the caller's choice of this number, Q-9).
+    /// A patch with a generated edge shorter than this is redone with d ÷= `factor` (the spec's switch
+    /// between the literal "(L⁰_min)²" and "L⁰_min" is the caller's choice of this number, Q-9).
     pub short_edge: Option<f64>,
+    /// A patch with a generated edge longer than this is redone with d ×= `factor` (L⁰_max for a
+    /// simplification: an edge the remesher could never simplify again is not made).
+    pub long_edge: Option<f64>,
     /// The refinement percentage (1.01 in the thesis).
     pub factor: f64,
-    /// At most this many generations (50 (spec reconstruction)).
+    /// At most this many generations (50 (spec reconstruction)); a hole with no acceptable patch after
+    /// them is refused.
     pub max_tries: usize,
 }
 
 impl RetryRule {
     /// The thesis's refinement loop with the given short-edge limit.
     pub const fn refinement(short_edge: Option<f64>) -> Self {
-        Self { require_interior_vertex: true, short_edge, factor: 1.01, max_tries: 50 }
+        Self { require_interior_vertex: true, short_edge, long_edge: None, factor: 1.01, max_tries: 50 }
     }
 
-    /// Simplification: one generation, no checks.
+    /// Simplification as the thesis runs it: one generation, no checks.
     pub const fn simplification() -> Self {
-        Self { require_interior_vertex: false, short_edge: None, factor: 1.01, max_tries: 1 }
+        Self { require_interior_vertex: false, short_edge: None, long_edge: None, factor: 1.01, max_tries: 1 }
+    }
+
+    /// Simplification whose generated edges stay within [`short_edge`, `long_edge`]: the density is
+    /// raised (an edge too long) or lowered (one too short) by 5 % for up to 50 generations (a
+    /// simplification density can be several times too coarse for `long_edge`: 1.05⁵⁰ ≈ 11).
+    pub const fn bounded_simplification(short_edge: Option<f64>, long_edge: Option<f64>) -> Self {
+        Self { require_interior_vertex: false, short_edge, long_edge, factor: 1.05, max_tries: 50 }
+    }
+
+    /// Whether `m` may be accepted, and if not which way the density should go.
+    fn verdict(&self, m: &HoleMesh) -> Verdict {
+        if self.require_interior_vertex && m.n_interior() == 0 {
+            return Verdict::Denser;
+        }
+        let (shortest, longest) = m.generated_edge_range();
+        if self.short_edge.is_some_and(|s| shortest < s) {
+            Verdict::Coarser
+        } else if self.long_edge.is_some_and(|l| longest > l) {
+            Verdict::Denser
+        } else {
+            Verdict::Accept
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Verdict {
+    Accept,
+    Denser,
+    Coarser,
+}
+
+impl HoleMesh {
+    /// Whether `a`–`b` is an edge of the border: consecutive points of one loop, either way round.
+    fn is_border_edge(&self, a: u32, b: u32) -> bool {
+        let (a, b) = (a as usize, b as usize);
+        if a >= self.n_border || b >= self.n_border {
+            return false;
+        }
+        let k = self.loop_starts.partition_point(|&s| s <= a);
+        let start = self.loop_starts[k - 1];
+        let end = self.loop_starts.get(k).copied().unwrap_or(self.n_border);
+        if !(start..end).contains(&b) {
+            return false;
+        }
+        let (n, i, j) = (end - start, a - start, b - start);
+        (i + 1) % n == j || (j + 1) % n == i
+    }
+
+    /// Shortest and longest edge the mesher generated (every edge but the border's), m; (∞, 0) when
+    /// it generated none.
+    pub fn generated_edge_range(&self) -> (f64, f64) {
+        let mut out = (f64::INFINITY, 0.0f64);
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if !self.is_border_edge(a, b) {
+                    let l = self.points[a as usize].distance(self.points[b as usize]);
+                    out = (out.0.min(l), out.1.max(l));
+                }
+            }
+        }
+        out
     }
 }
 
@@ -577,13 +654,17 @@ pub struct RetriedMesh {
     pub tries: usize,
     /// The density finally used.
     pub density: f64,
-    /// Whether the result had to fall back to ear clipping (no interior vertex).
+    /// Whether the patch is an ear clipping of the border (no interior vertex), used when the front
+    /// got stuck at every density and the clipping passes the rule.
     pub ear_clipped: bool,
 }
 
 /// Meshes a hole at density `d` with the thesis's retry loop: a stuck front, a patch without interior
-/// vertex (when required) or one with a too-short edge is regenerated at d·factor or d/factor. When
-/// the tries run out, the last acceptable patch is returned, else a single loop is ear-clipped.
+/// vertex (when required) or with a generated edge outside the rule's bounds is regenerated at
+/// d·factor or d/factor. A patch that fails the rule is never returned: when the tries run out the
+/// hole is refused ([`LocalMeshError::Refused`]) and the caller leaves the region as it was. Only when
+/// the front got stuck at every density is a single loop ear-clipped, and that too only if the
+/// clipping passes the rule.
 pub fn mesh_hole_with_retries(
     loops: &[Vec<DVec2>],
     density: f64,
@@ -591,35 +672,36 @@ pub fn mesh_hole_with_retries(
     improvement_rounds: usize,
 ) -> Result<RetriedMesh, LocalMeshError> {
     let mut d = density;
-    let mut fallback: Option<(HoleMesh, usize, f64)> = None;
-    for tries in 1..=rule.max_tries.max(1) {
+    let max_tries = rule.max_tries.max(1);
+    let mut generated_any = false;
+    for tries in 1..=max_tries {
         let params = LocalMeshParams { size: MeshSize::Density(d), improvement_rounds };
         match mesh_hole(loops, &params) {
             Ok(m) => {
-                if rule.require_interior_vertex && m.n_interior() == 0 {
-                    fallback.get_or_insert((m, tries, d));
-                    d *= rule.factor;
-                } else if rule.short_edge.is_some_and(|s| m.min_edge() < s) {
-                    fallback.get_or_insert((m, tries, d));
-                    d /= rule.factor;
-                } else {
-                    return Ok(RetriedMesh { mesh: m, tries, density: d, ear_clipped: false });
+                generated_any = true;
+                match rule.verdict(&m) {
+                    Verdict::Accept => {
+                        return Ok(RetriedMesh { mesh: m, tries, density: d, ear_clipped: false });
+                    }
+                    Verdict::Denser => d *= rule.factor,
+                    Verdict::Coarser => d /= rule.factor,
                 }
             }
             Err(LocalMeshError::Stuck(_)) => d *= rule.factor,
             Err(e) => return Err(e),
         }
     }
-    if let Some((mesh, tries, density)) = fallback {
-        return Ok(RetriedMesh { mesh, tries, density, ear_clipped: false });
-    }
-    if loops.len() == 1
+    if !generated_any
+        && loops.len() == 1
         && let Some(triangles) = ear_clip(&loops[0])
     {
-        let mesh = HoleMesh { points: loops[0].clone(), n_border: loops[0].len(), triangles };
-        return Ok(RetriedMesh { mesh, tries: rule.max_tries, density: d, ear_clipped: true });
+        let mesh =
+            HoleMesh { points: loops[0].clone(), n_border: loops[0].len(), loop_starts: vec![0], triangles };
+        if rule.verdict(&mesh) == Verdict::Accept {
+            return Ok(RetriedMesh { mesh, tries: max_tries, density: d, ear_clipped: true });
+        }
     }
-    Err(LocalMeshError::Stuck(0))
+    Err(LocalMeshError::Refused(max_tries))
 }
 
 #[cfg(test)]
@@ -769,5 +851,69 @@ mod tests {
         assert_eq!(s.tries, 1);
         let e = ear_clip(&square(3, 1.0)).unwrap();
         assert_eq!(e.len(), 10);
+    }
+
+    #[test]
+    fn a_hole_that_fails_every_retry_is_refused() {
+        // Unit equilateral hole: every patch with an interior vertex has edges shorter than 1 m, so a
+        // 1.5 m short-edge limit can never be met; nor can an interior vertex be forced in one try at
+        // d = 0.85. Neither returns a patch that broke the rule.
+        let loops = vec![vec![DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(0.5, 0.75f64.sqrt())]];
+        let r = mesh_hole_with_retries(&loops, 2.0, &RetryRule::refinement(Some(1.5)), 3);
+        assert_eq!(r, Err(LocalMeshError::Refused(50)));
+        let once = RetryRule { max_tries: 1, ..RetryRule::refinement(None) };
+        assert_eq!(mesh_hole_with_retries(&loops, 0.85, &once, 3), Err(LocalMeshError::Refused(1)));
+        // The same hole with a limit the patch meets is accepted, and its generated edges keep it.
+        let ok = mesh_hole_with_retries(&loops, 2.0, &RetryRule::refinement(Some(0.2)), 3).unwrap();
+        assert!(ok.mesh.n_interior() > 0 && ok.mesh.generated_edge_range().0 >= 0.2, "{ok:?}");
+    }
+
+    #[test]
+    fn only_generated_edges_count_against_the_length_bounds() {
+        // A 1 m square with a 1 cm border edge: the border is not the mesher's to change, so a 5 cm
+        // short-edge limit is read on the edges it generates. Counting the border (as `min_edge` does)
+        // would refuse every patch.
+        let mut loop0 = vec![DVec2::new(0.0, 0.0), DVec2::new(0.01, 0.0)];
+        loop0.extend([DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)]);
+        let loops = vec![loop0];
+        let r = mesh_hole_with_retries(&loops, 0.85, &RetryRule::refinement(Some(0.005)), 3).unwrap();
+        check(&loops, &r.mesh, "short border");
+        assert!(r.mesh.min_edge() <= 0.01 + 1e-15);
+        let (shortest, longest) = r.mesh.generated_edge_range();
+        assert!(shortest >= 0.005 && longest > shortest, "{shortest} {longest}");
+        // Hand-built: a square loop and a triangular island; the only generated edges are the ones
+        // joining them and the square's diagonal, never (3, 4), which joins the two loops' ends.
+        let m = HoleMesh {
+            points: vec![
+                DVec2::new(0.0, 0.0),
+                DVec2::new(4.0, 0.0),
+                DVec2::new(4.0, 4.0),
+                DVec2::new(0.0, 4.0),
+                DVec2::new(1.0, 1.0),
+                DVec2::new(1.0, 2.0),
+                DVec2::new(2.0, 1.0),
+            ],
+            n_border: 7,
+            loop_starts: vec![0, 4],
+            triangles: vec![[0, 1, 6], [0, 6, 4], [3, 0, 4], [3, 4, 5], [1, 2, 6], [2, 5, 6], [2, 3, 5]],
+        };
+        assert!(m.is_border_edge(0, 1) && m.is_border_edge(3, 0) && m.is_border_edge(6, 4));
+        assert!(!m.is_border_edge(3, 4) && !m.is_border_edge(0, 2) && !m.is_border_edge(0, 6));
+        let (shortest, longest) = m.generated_edge_range();
+        assert_eq!(shortest, 2f64.sqrt()); // 0–4
+        assert_eq!(longest, 13f64.sqrt()); // 2–5 and 2–6: √(2² + 3²)
+    }
+
+    #[test]
+    fn bounded_simplification_makes_no_edge_longer_than_its_bound() {
+        // A 1 m square cut into 0.1 m border edges, meshed coarsely (d = 0.2 asks for 0.43 m edges):
+        // with a 0.3 m bound the density is raised until every generated edge is within it.
+        let loops = vec![square(10, 1.0)];
+        let free = mesh_hole_with_retries(&loops, 0.2, &RetryRule::simplification(), 3).unwrap();
+        assert!(free.mesh.generated_edge_range().1 > 0.3, "{:?}", free.mesh.generated_edge_range());
+        let rule = RetryRule::bounded_simplification(None, Some(0.3));
+        let bounded = mesh_hole_with_retries(&loops, 0.2, &rule, 3).unwrap();
+        check(&loops, &bounded.mesh, "bounded");
+        assert!(bounded.mesh.generated_edge_range().1 <= 0.3 && bounded.density > 0.2, "{bounded:?}");
     }
 }

@@ -2,6 +2,8 @@
 //! the input of the local mesh generator, contour edges on it may be bisected (refinement) or merged
 //! where straight (simplification), and the generated patch replaces the faces.
 
+use std::collections::BTreeMap;
+
 use glam::DVec2;
 
 use super::local_mesh::{LocalMeshError, RetryRule, mesh_hole_with_retries};
@@ -93,18 +95,15 @@ impl AdaptiveMesh {
         for ring in &loops {
             let n = ring.len();
             let mut out = Vec::with_capacity(2 * n);
+            let keep = match settings.contour {
+                ContourRule::MergeStraight { max_length } => self.merge_keep(ring, max_length, faces),
+                _ => vec![true; n],
+            };
             for i in 0..n {
                 let (a, b) = (ring[i], ring[(i + 1) % n]);
                 let contour = self.find_half_edge(a, b).is_some_and(|h| self.twin[h as usize] == NONE);
                 let (pa, pb) = (self.rest[a as usize], self.rest[b as usize]);
-                let prev = ring[(i + n - 1) % n];
-                let keep = match settings.contour {
-                    ContourRule::MergeStraight { max_length } => {
-                        !self.droppable(prev, a, b, max_length, faces)
-                    }
-                    _ => true,
-                };
-                if keep {
+                if keep[i] {
                     out.push((Some(a), pa));
                 }
                 if let ContourRule::Bisect { min_length } = settings.contour
@@ -137,6 +136,98 @@ impl AdaptiveMesh {
         Ok(RegionReport { new_vertices, tries: r.tries, density: r.density, ear_clipped: r.ear_clipped })
     }
 
+    /// The vertices that [`AdaptiveMesh::remesh_region`] of `faces` under `contour` is free to remove
+    /// without making an edge longer than `max_span` (rest space): those with every face in the set
+    /// that are neither locked nor on the cloth contour and whose star, once they are gone, can be
+    /// triangulated with no edge longer than `max_span`, and the
+    /// contour vertices [`ContourRule::MergeStraight`] would drop. A region with none cannot lose a
+    /// face within the bound: the mesher keeps every border point, and a disc with b border points and
+    /// i inside has b − 2 + 2i triangles.
+    pub fn removable_vertices(&self, faces: &[u32], contour: ContourRule, max_span: f64) -> Vec<u32> {
+        let mut out = Vec::new();
+        for ring in self.region_border(faces) {
+            if let ContourRule::MergeStraight { max_length } = contour {
+                let keep = self.merge_keep(&ring, max_length, faces);
+                out.extend(ring.iter().zip(keep).filter(|(_, k)| !k).map(|(&a, _)| a));
+            }
+        }
+        let mut vertices: Vec<u32> = faces.iter().flat_map(|&f| self.face_slots()[f as usize]).collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        for v in vertices {
+            let span = || {
+                let ring: Vec<DVec2> = self.star_ring(v).iter().map(|&w| self.rest[w as usize]).collect();
+                minimax_triangulation(&ring) <= max_span
+            };
+            if !self.locked[v as usize]
+                && !self.is_boundary_vertex(v)
+                && self.vertex_faces(v).iter().all(|f| faces.contains(f))
+                && span()
+            {
+                out.push(v);
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// The neighbours of interior vertex `v` in counter-clockwise order (the border of its star).
+    fn star_ring(&self, v: u32) -> Vec<u32> {
+        let faces = self.vertex_faces(v);
+        // Each face [v, a, b] (rotated to start at v) gives the ring edge a → b.
+        let next: BTreeMap<u32, u32> = faces
+            .iter()
+            .map(|&f| {
+                let t = self.face_slots()[f as usize];
+                let k = t.iter().position(|&c| c == v).expect("a face of v holds v");
+                (t[(k + 1) % 3], t[(k + 2) % 3])
+            })
+            .collect();
+        let Some((&start, _)) = next.iter().next() else { return Vec::new() };
+        let mut ring = vec![start];
+        while let Some(&w) = next.get(ring.last().expect("not empty")) {
+            if w == start || ring.len() > next.len() {
+                break;
+            }
+            ring.push(w);
+        }
+        ring
+    }
+
+    /// Which vertices of border loop `ring` the straight-contour merge keeps. Walking from a vertex no
+    /// merge can drop, a vertex goes when it may be dropped on its own and the edge from the last kept
+    /// vertex to its successor stays straight and no longer than `max_length` (so a run of droppable
+    /// vertices is merged into edges of at most `max_length`, not into one long edge).
+    fn merge_keep(&self, ring: &[u32], max_length: f64, faces: &[u32]) -> Vec<bool> {
+        let n = ring.len();
+        let mut keep = vec![true; n];
+        let at = |i: usize| (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+        let Some(s) = (0..n).find(|&i| {
+            let (prev, a, next) = at(i);
+            !self.droppable(prev, a, next, max_length, faces)
+        }) else {
+            return keep;
+        };
+        let mut anchor = self.rest[ring[s] as usize];
+        for k in 1..n {
+            let i = (s + k) % n;
+            let (prev, a, next) = at(i);
+            let (q, r) = (self.rest[a as usize], self.rest[next as usize]);
+            let straight =
+                super::mesh::cross2(anchor, q, r).abs() <= 1e-12 * anchor.distance(q) * q.distance(r);
+            if self.droppable(prev, a, next, max_length, faces)
+                && straight
+                && anchor.distance(r) <= max_length
+            {
+                keep[i] = false;
+            } else {
+                anchor = q;
+            }
+        }
+        keep
+    }
+
     /// Whether border vertex `a` (between `prev` and `next` on the loop) may be dropped: both its loop
     /// edges are contour edges, they are collinear, the merged edge is short enough, it is not locked
     /// and all its faces are in the region.
@@ -150,6 +241,65 @@ impl AdaptiveMesh {
         let straight = super::mesh::cross2(p, q, r).abs() <= 1e-12 * p.distance(q) * q.distance(r);
         straight && p.distance(r) <= max_length && self.vertex_faces(a).iter().all(|f| faces.contains(f))
     }
+}
+
+/// Whether segments ab and cd cross at a point inside both.
+fn cross_properly(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let (d1, d2) = (super::mesh::cross2(a, b, c), super::mesh::cross2(a, b, d));
+    let (d3, d4) = (super::mesh::cross2(c, d, a), super::mesh::cross2(c, d, b));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// Whether `q` lies inside the closed polygon `p` (crossing number).
+fn contains(p: &[DVec2], q: DVec2) -> bool {
+    let n = p.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The smallest possible longest edge over the triangulations of the simple counter-clockwise polygon
+/// `p` that add no point (its sides included); ∞ when it has none (fewer than three points, or no
+/// proper triangulation). Dynamic programming over sub-chains, O(n³): used on vertex stars, n ≈ 6.
+fn minimax_triangulation(p: &[DVec2]) -> f64 {
+    let n = p.len();
+    if n < 3 {
+        return f64::INFINITY;
+    }
+    let crosses = |a: usize, b: usize| {
+        (0..n).any(|i| {
+            let j = (i + 1) % n;
+            i != a && i != b && j != a && j != b && cross_properly(p[a], p[b], p[i], p[j])
+        })
+    };
+    // A chord of the polygon: a side, or a diagonal crossing no side with its midpoint inside.
+    let chord = |a: usize, b: usize| {
+        (b == (a + 1) % n || a == (b + 1) % n) || (!crosses(a, b) && contains(p, 0.5 * (p[a] + p[b])))
+    };
+    let mut best = vec![vec![f64::INFINITY; n]; n];
+    for i in 0..n - 1 {
+        best[i][i + 1] = 0.0;
+    }
+    for gap in 2..n {
+        for i in 0..n - gap {
+            let j = i + gap;
+            if !chord(i, j) {
+                continue;
+            }
+            for k in i + 1..j {
+                if super::mesh::is_proper(p[i], p[k], p[j]) {
+                    let worst = best[i][k].max(best[k][j]).max(p[i].distance(p[k])).max(p[k].distance(p[j]));
+                    best[i][j] = best[i][j].min(worst);
+                }
+            }
+        }
+    }
+    best[0][n - 1].max(p[0].distance(p[n - 1]))
 }
 
 #[cfg(test)]
@@ -167,6 +317,50 @@ mod tests {
                 })
             })
             .collect()
+    }
+
+    #[test]
+    fn density_factor_is_the_mean_border_edge_factor() {
+        // Eq. 4.22, fator_j = L⁰_j² / (2 A⁰_j), over the border edges of the face set. A right-isosceles
+        // grid triangle has 1 on each leg and 2 on its hypotenuse; a square of two has four legs; an
+        // equilateral triangle has 2/√3 on every side. The factor does not depend on size.
+        for size in [1.0, 0.1] {
+            let m = grid(2, size, DiagonalPattern::Uniform);
+            assert!((border_density(&m, &[0]) - 4.0 / 3.0).abs() < 1e-12, "one face, side {size}");
+            assert!((border_density(&m, &[0, 1]) - 1.0).abs() < 1e-12, "both faces, side {size}");
+        }
+        let h = 0.75f64.sqrt();
+        let rest = vec![DVec2::ZERO, DVec2::X, DVec2::new(0.5, h)];
+        let x = rest.iter().map(|p| p.extend(0.0)).collect();
+        let tri = AdaptiveMesh::new(rest, x, vec![glam::DVec3::ZERO; 3], vec![[0, 1, 2]]).unwrap();
+        assert!((border_density(&tri, &[0]) - 2.0 / 3f64.sqrt()).abs() < 1e-12);
+        // The whole 3 × 3 grid: its inner edges (hypotenuses among them) do not count, only the eight
+        // contour legs.
+        let m = grid(3, 1.0, DiagonalPattern::Uniform);
+        let all: Vec<u32> = (0..8).collect();
+        assert!((border_density(&m, &all) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn removable_vertices_are_inside_unlocked_and_within_the_span() {
+        // 3 × 3 grid of side 1: only the centre, 4, has all its faces inside and is off the contour. Its
+        // star, the hexagon 0, 1, 5, 8, 7, 3, closes at best with edges of 1 m (diagonals 1–7, 1–3 and
+        // 5–7; every triangulation needs one of 1–7, 3–5 or a longer one).
+        let mut m = grid(3, 1.0, DiagonalPattern::Uniform);
+        let all: Vec<u32> = (0..8).collect();
+        let span = 1.0;
+        assert_eq!(m.removable_vertices(&all, ContourRule::Keep, span), vec![4]);
+        assert!(m.removable_vertices(&all, ContourRule::Keep, 0.99 * span).is_empty(), "span too short");
+        assert!(m.removable_vertices(&all[1..], ContourRule::Keep, span).is_empty(), "a face of 4 is out");
+        // Straight contour vertices (1, 3, 5, 7) join when the merge may drop them (merged edge 1 m).
+        let merge = ContourRule::MergeStraight { max_length: 1.0 };
+        assert_eq!(m.removable_vertices(&all, merge, span), vec![1, 3, 4, 5, 7]);
+        let short = ContourRule::MergeStraight { max_length: 0.9 };
+        assert_eq!(m.removable_vertices(&all, short, span), vec![4]);
+        assert_eq!(minimax_triangulation(&[0, 1, 5, 8, 7, 3].map(|v| m.rest()[v])), 1.0);
+        m.set_locked(4, true);
+        m.set_locked(7, true);
+        assert_eq!(m.removable_vertices(&all, merge, span), vec![1, 3, 5]);
     }
 
     #[test]
@@ -210,6 +404,13 @@ mod tests {
         assert!((m.total_rest_area() - area).abs() < 1e-13);
         assert!(m.n_faces() < n_before, "{} from {n_before}", m.n_faces());
         assert!(m.is_vertex_alive(72) && m.is_vertex_alive(80), "corners stay");
-        assert!(!m.is_vertex_alive(76), "a straight contour vertex is merged away");
+        // Straight contour vertices of the top edge are merged away, into edges no longer than 0.3 m
+        // (pairs of 0.125 m edges: the eight become five or fewer, never one 1 m edge).
+        let top: Vec<u32> = (72..=80).filter(|&v| m.is_vertex_alive(v)).collect();
+        assert!(top.len() < 9 && top.len() >= 5, "{top:?}");
+        for w in top.windows(2) {
+            let l = m.rest()[w[0] as usize].distance(m.rest()[w[1] as usize]);
+            assert!(l <= 0.3 + 1e-12, "merged contour edge {w:?} of {l} m");
+        }
     }
 }

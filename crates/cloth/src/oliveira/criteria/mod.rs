@@ -76,6 +76,11 @@ pub struct OliveiraRemeshing {
     pub improvement_rounds: usize,
     /// Run the simplification criteria at all (on by default).
     pub simplify: bool,
+    /// After a simplification is refused (its patch has no fewer faces, or none meets the edge-length
+    /// rules), its region's edges are stamped as if just refined, so they wait t_simp before they are
+    /// selected again (anima's; on). Off, a region that cannot coarsen is regenerated and refused at
+    /// every pass, as before.
+    pub delay_refused_simplification: bool,
     /// Time between remeshing passes, s; 0 remeshes after every step as the thesis does (Fig. 4.1).
     pub interval_s: f64,
     /// cast every edge that may no longer be refined (L⁰ < L⁰_min) at the end of each step and
@@ -102,6 +107,7 @@ impl OliveiraRemeshing {
             max_tries: 50,
             improvement_rounds: 3,
             simplify: true,
+            delay_refused_simplification: true,
             interval_s: 0.0,
             repel_unrefinable_edges: true,
         }
@@ -132,12 +138,20 @@ impl OliveiraRemeshing {
         l0 >= self.min_rest_length
     }
 
-    /// The patch edge length below which a refinement patch is regenerated.
+    /// The length below which no generated edge may fall: a patch with a shorter one is regenerated,
+    /// and refused when no retry avoids it.
     pub fn short_edge_limit(&self) -> f64 {
         match self.short_edge {
             ShortEdgeRule::LiteralSquare => self.min_rest_length * self.min_rest_length,
             ShortEdgeRule::MinLength => self.min_rest_length,
         }
+    }
+
+    /// The shortest cloth-contour edge a refinement bisects (spec §6.5): L⁰_min, and at least twice
+    /// the short-edge limit so that both halves keep it (with `MinLength`, 2·L⁰_min; with the literal
+    /// rule the limit is far below L⁰_min and L⁰_min decides).
+    pub fn min_bisected_length(&self) -> f64 {
+        self.min_rest_length.max(2.0 * self.short_edge_limit())
     }
 }
 
@@ -382,3 +396,6 @@ pub fn interpolate_at(rest: &[DVec2], triangles: &[[u32; 3]], values: &[DVec3], 
     }
     best.1
 }
+
+#[cfg(test)]
+mod tests;
