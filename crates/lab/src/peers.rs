@@ -239,8 +239,8 @@ fn machine() -> String {
     format!("{model}, {cores} logical cores")
 }
 
-/// Today's date (UTC) as YYYY-MM-DD.
-fn today() -> String {
+/// Today's date (UTC) as YYYY-MM-DD, from the system clock (the reports' dates).
+pub(crate) fn today() -> String {
     let days = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs() / 86_400) as i64;
