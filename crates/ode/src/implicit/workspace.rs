@@ -158,6 +158,12 @@ impl<C: Coord> ImplicitWorkspace<C> {
         strict: bool,
     ) -> Result<usize, OdeError> {
         let started = self.profile.is_some().then(Instant::now);
+        // When a preconditioner's set-up ended: the solve's time is counted from there.
+        #[cfg_attr(
+            not(feature = "sparse-cholesky"),
+            expect(unused_mut, reason = "set by the sparse solvers only")
+        )]
+        let mut setup_done = None;
         filter.apply(&mut self.dv);
         let outcome: CgOutcome = match self.solver {
             LinearSolver::ConjugateGradient { tolerance, max_iterations } => pcg(
@@ -196,12 +202,8 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 let before = two_level.refactorizations;
                 two_level.update(&self.a, pattern, masses, prescribed).map_err(OdeError::Factorization)?;
                 let refreshed = two_level.refactorizations - before;
-                let setup_done = self.profile.is_some().then(Instant::now);
-                if let (Some(p), Some(s), Some(d)) = (&mut self.profile, started, setup_done) {
-                    p.setup_s += (d - s).as_secs_f64();
-                    p.factorizations += refreshed;
-                }
-                let outcome = pcg(
+                setup_done = setup_ended(&mut self.profile, started, refreshed);
+                pcg(
                     &self.a,
                     pattern,
                     filter,
@@ -211,12 +213,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     &mut self.cg,
                     tolerance,
                     max_iterations,
-                );
-                if let (Some(p), Some(d)) = (&mut self.profile, setup_done) {
-                    p.solve_s += d.elapsed().as_secs_f64();
-                    p.solver_iterations += outcome.iterations;
-                }
-                return finish(outcome, strict);
+                )
             }
             #[cfg(feature = "sparse-cholesky")]
             LinearSolver::RigidAggregation { tolerance, max_iterations } => {
@@ -234,11 +231,8 @@ impl<C: Coord> ImplicitWorkspace<C> {
                         p.factorizations += 1;
                     }
                 }
-                let setup_done = self.profile.is_some().then(Instant::now);
-                if let (Some(p), Some(s), Some(d)) = (&mut self.profile, started, setup_done) {
-                    p.setup_s += (d - s).as_secs_f64();
-                }
-                let outcome = pcg(
+                setup_done = setup_ended(&mut self.profile, started, 0);
+                pcg(
                     &self.a,
                     pattern,
                     filter,
@@ -248,20 +242,30 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     &mut self.cg,
                     tolerance,
                     max_iterations,
-                );
-                if let (Some(p), Some(d)) = (&mut self.profile, setup_done) {
-                    p.solve_s += d.elapsed().as_secs_f64();
-                    p.solver_iterations += outcome.iterations;
-                }
-                return finish(outcome, strict);
+                )
             }
         };
-        if let (Some(p), Some(s)) = (&mut self.profile, started) {
+        if let (Some(p), Some(s)) = (&mut self.profile, setup_done.or(started)) {
             p.solve_s += s.elapsed().as_secs_f64();
             p.solver_iterations += outcome.iterations;
         }
         finish(outcome, strict)
     }
+}
+
+/// Ends a preconditioner's set-up that began at `started`: adds its time and `factorizations` to the
+/// profile, and returns when it ended (`None` when not profiling).
+#[cfg(feature = "sparse-cholesky")]
+fn setup_ended(
+    profile: &mut Option<SolveProfile>,
+    started: Option<Instant>,
+    factorizations: usize,
+) -> Option<Instant> {
+    let (p, s) = (profile.as_mut()?, started?);
+    let done = Instant::now();
+    p.setup_s += (done - s).as_secs_f64();
+    p.factorizations += factorizations;
+    Some(done)
 }
 
 fn finish(outcome: CgOutcome, strict: bool) -> Result<usize, OdeError> {
