@@ -18,6 +18,16 @@ pub enum Target {
     NoTorque,
     /// Damping only, T = −kd θ̇ (zero in the ODE-style mode, whose damping is the brake).
     DampingOnly,
+    /// SIMBICON's stance hip (Yin, Loken & van de Panne 2007): no PD target of its own. The actuator
+    /// holds the body it pushes against — its parent, the torso for a hip — at world angle `angle`
+    /// (rad, the model's convention), and the other hip `swing` (an actuator index of the same model)
+    /// shares the work: τ = −τ_torso − τ_swing, where τ_torso = kp (angle − θ_torso) − kd ω_torso is
+    /// the PD torque, with this actuator's gains, that would hold the torso, and τ_swing the torque
+    /// `swing` applies in the same physics step. The two hips then exert τ_torso on the torso
+    /// between them (each hip acts −τ on its parent). Re-evaluated at every physics sub-step and
+    /// applied as an explicit torque in every PD mode, clamped like any signal (§4.4); the torso is
+    /// measured with its world angle and rate, not through the joint.
+    Torso { angle: f64, swing: usize },
 }
 
 /// The frame an [`Target::Angle`] is measured in.
@@ -82,10 +92,15 @@ impl Commands {
         if !(signal.weight >= 0.0 && signal.weight.is_finite()) {
             return Err(CommandError::BadWeight(signal.weight));
         }
-        if let Target::Angle(a) = signal.target
+        if let Target::Angle(a) | Target::Torso { angle: a, .. } = signal.target
             && !a.is_finite()
         {
             return Err(CommandError::BadAngle(a));
+        }
+        if let Target::Torso { swing, .. } = signal.target
+            && (swing >= self.n_actuators || swing == signal.actuator)
+        {
+            return Err(CommandError::BadSwing { actuator: signal.actuator, swing });
         }
         if self.signals.len() >= self.capacity {
             return Err(CommandError::Full { capacity: self.capacity });
@@ -127,6 +142,10 @@ pub enum CommandError {
     BadAngle(f64),
     #[error("the commands hold at most {capacity} signals; raise `max_signals_per_actuator`")]
     Full { capacity: usize },
+    #[error(
+        "a torso signal on actuator {actuator} needs another actuator of the model as its swing, found {swing}"
+    )]
+    BadSwing { actuator: usize, swing: usize },
     #[error("a pose needs one angle per actuator: expected {expected}, found {found}")]
     PoseLength { expected: usize, found: usize },
 }
@@ -187,7 +206,8 @@ impl TargetMix {
 }
 
 /// PD torque of one signal, Eq. 2.1, clamped to ±max_torque (spec §4.4: each signal is clamped before
-/// averaging). `kd` is 0 in the ODE-style mode. `None` for NoTorque.
+/// averaging). `kd` is 0 in the ODE-style mode. `None` for NoTorque, and for a torso signal, whose
+/// torque needs the other actuators' ([`torso_torque`]).
 #[inline]
 pub(crate) fn signal_torque(
     target: Target,
@@ -200,10 +220,27 @@ pub(crate) fn signal_torque(
 ) -> Option<f64> {
     let t = match target {
         Target::Angle(_) => kp * (target_angle - angle) - kd * rate,
-        Target::NoTorque => return None,
+        Target::NoTorque | Target::Torso { .. } => return None,
         Target::DampingOnly => -kd * rate,
     };
     Some(t.clamp(-max_torque, max_torque))
+}
+
+/// The stance hip's torque of a [`Target::Torso`] signal, clamped to ±max_torque (spec §4.4):
+/// τ = −τ_torso − τ_swing with τ_torso = kp (θd − θ_torso) − kd ω_torso. All angles, rates and
+/// torques counter-clockwise; `torso_angle`, `torso_rate` are the torso's world angle and rate.
+#[inline]
+pub(crate) fn torso_torque(
+    target_angle: f64,
+    torso_angle: f64,
+    torso_rate: f64,
+    swing_torque: f64,
+    kp: f64,
+    kd: f64,
+    max_torque: f64,
+) -> f64 {
+    let torso = kp * (target_angle - torso_angle) - kd * torso_rate;
+    (-torso - swing_torque).clamp(-max_torque, max_torque)
 }
 
 #[cfg(test)]
@@ -253,6 +290,16 @@ mod tests {
     }
 
     #[test]
+    fn the_stance_hip_torque_is_minus_the_torso_and_swing_torques() {
+        // τ_torso = 300 (0.1 − 0.05) − 30 · 0.2 = 9; τ_swing = 4: τ = −13.
+        let t = torso_torque(0.1, 0.05, 0.2, 4.0, 300.0, 30.0, 1000.0);
+        assert!((t + 13.0).abs() < 1e-12, "{t}");
+        // Clamped like every signal (§4.4).
+        assert_eq!(torso_torque(0.1, 0.05, 0.2, 4.0, 300.0, 30.0, 10.0), -10.0);
+        assert_eq!(signal_torque(Target::Torso { angle: 0.1, swing: 1 }, 0.1, 0.0, 0.0, 1.0, 1.0, 1.0), None);
+    }
+
+    #[test]
     fn commands_refuse_without_allocating() {
         let mut c = Commands::new(2, 1);
         c.push(Signal::angle(0, 0.1)).unwrap();
@@ -265,5 +312,12 @@ mod tests {
             c.push(Signal { weight: -1.0, ..Signal::angle(0, 0.0) }),
             Err(CommandError::BadWeight(_))
         ));
+        // A torso signal needs another actuator as its swing.
+        for swing in [0, 2] {
+            let torso = Signal { target: Target::Torso { angle: 0.0, swing }, ..Signal::angle(0, 0.0) };
+            assert!(matches!(c.push(torso), Err(CommandError::BadSwing { .. })), "swing {swing}");
+        }
+        let torso = Signal { target: Target::Torso { angle: 0.0, swing: 1 }, ..Signal::angle(0, 0.0) };
+        c.push(torso).unwrap();
     }
 }

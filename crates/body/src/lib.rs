@@ -7,7 +7,9 @@
 //!   fixed control step with physics sub-steps; welds released at run time; pushes.
 //! - Actuators: a controller holds [`Signal`]s in a model's [`Commands`]; several targets on one
 //!   actuator are averaged by weight (Eqs. 5.1–5.2), and the PD law runs in the [`PdMode`] the skeleton
-//!   chooses — explicit, the thesis's ODE-style brake, Rapier's implicit motors or springs, or stable PD.
+//!   chooses — explicit, the thesis's ODE-style brake, Rapier's implicit motors or springs, or stable PD;
+//!   a [`Target::Torso`] signal is SIMBICON's stance hip, τ = −τ_torso − τ_swing, applied explicitly after
+//!   every other actuator's torque is known.
 //! - [`Sensors`]: plain values read into caller-owned storage, a [`SensorDelay`] line, and the
 //!   thesis's sensor catalogue ([`sensors::catalogue`]).
 //!

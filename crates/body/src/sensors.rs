@@ -11,7 +11,7 @@ use crate::skeleton::{Role, Side};
 use crate::world::{Touch, World};
 
 /// Bodies the catalogue asks about, found once from roles and names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyLayout {
     /// Feet [left, right] (role `Foot`).
     pub feet: [Option<usize>; 2],
@@ -21,6 +21,9 @@ pub struct BodyLayout {
     pub head: Option<usize>,
     /// The body named `abdomen`, if any.
     pub abdomen: Option<usize>,
+    /// Per foot [left, right]: where the ankle (the joint that hangs the foot from the leg) sits
+    /// relative to the foot's centre, in the foot's own frame (the initial pose's offset), m.
+    pub ankles: [Option<[f64; 2]>; 2],
 }
 
 /// One contact: body `body` of this model touches `other`.
@@ -90,12 +93,20 @@ impl Sensors {
         let find = |role: Role, side: Side| {
             (0..nb).find(|&b| sk.body(b).role == role && (side == Side::Centre || sk.body(b).side == side))
         };
+        let feet = [find(Role::Foot, Side::Left), find(Role::Foot, Side::Right)];
+        // Body angles are zero in the initial pose, so the file's offset is the one in the foot's frame.
+        let ankle = |foot: Option<usize>| {
+            let (f, j) = (foot?, sk.parent_joint(foot?)?);
+            let (anchor, centre) = (sk.desc().joints[j].anchor, sk.body(f).centre);
+            Some([anchor.0 - centre.0, anchor.1 - centre.1])
+        };
         let layout = BodyLayout {
-            feet: [find(Role::Foot, Side::Left), find(Role::Foot, Side::Right)],
+            feet,
             hands: [find(Role::Hand, Side::Left), find(Role::Hand, Side::Right)],
             pelvis: find(Role::Pelvis, Side::Centre),
             head: find(Role::Head, Side::Centre),
             abdomen: sk.body_index("abdomen"),
+            ankles: [ankle(feet[0]), ankle(feet[1])],
         };
         Ok(Sensors {
             model,
@@ -293,6 +304,27 @@ pub mod catalogue {
     /// m, in the facing direction (0 for a model without that foot). Continuous, not a switch.
     pub fn com_offset(s: &Sensors, side: usize) -> f64 {
         s.layout.feet[side].map_or(0.0, |f| s.facing * (s.com[0] - s.body_position[f][0]))
+    }
+
+    /// The world position of foot `side`'s ankle, m (`None` for a model without that foot or
+    /// whose foot hangs from no joint).
+    pub fn ankle_position(s: &Sensors, side: usize) -> Option<[f64; 2]> {
+        let (f, r) = (s.layout.feet[side]?, s.layout.ankles[side]?);
+        let (c, (sin, cos)) = (s.body_position[f], s.body_angle[f].sin_cos());
+        Some([c[0] + cos * r[0] - sin * r[1], c[1] + sin * r[0] + cos * r[1]])
+    }
+
+    /// d of SIMBICON (Yin, Loken & van de Panne 2007): how far the centre of mass is ahead of the
+    /// ankle of foot `side` (the stance ankle), m, in the facing direction; 0 without that ankle.
+    /// Continuous, not a switch.
+    pub fn com_ahead_of_ankle(s: &Sensors, side: usize) -> f64 {
+        ankle_position(s, side).map_or(0.0, |a| s.facing * (s.com[0] - a[0]))
+    }
+
+    /// S-FOOTDOWN(f), anima's: 1 if foot `side` touches the ground — SIMBICON's foot strike, which
+    /// ends a swing.
+    pub fn foot_down(s: &Sensors, side: usize) -> f64 {
+        on(s.layout.feet[side].is_some_and(|f| s.on_ground[f]))
     }
 
     /// v of SIMBICON-style feedback: the centre of mass's horizontal speed in the facing direction,

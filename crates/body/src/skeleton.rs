@@ -298,11 +298,19 @@ pub enum BuiltinSkeleton {
     Thrower,
     /// The backflip's pusher: the humanoid mirrored to face −x, with hands and wrists (§3.5.2).
     Pusher,
+    /// The walking humanoid with SIMBICON-style PD gains (kp = 300 N·m/rad, kd = 30 N·m·s/rad on every
+    /// actuator, implicit springs; Yin et al. 2007) instead of Table 6.2's: the faithful SIMBICON
+    /// walker's figure.
+    HumanoidSimbicon,
 }
 
 impl BuiltinSkeleton {
-    pub const ALL: [BuiltinSkeleton; 3] =
-        [BuiltinSkeleton::Humanoid, BuiltinSkeleton::Thrower, BuiltinSkeleton::Pusher];
+    pub const ALL: [BuiltinSkeleton; 4] = [
+        BuiltinSkeleton::Humanoid,
+        BuiltinSkeleton::Thrower,
+        BuiltinSkeleton::Pusher,
+        BuiltinSkeleton::HumanoidSimbicon,
+    ];
 
     /// The RON text of this skeleton, as shipped in `assets/skeletons/`.
     pub fn ron(self) -> &'static str {
@@ -310,6 +318,9 @@ impl BuiltinSkeleton {
             BuiltinSkeleton::Humanoid => include_str!("../../../assets/skeletons/humanoid.ron"),
             BuiltinSkeleton::Thrower => include_str!("../../../assets/skeletons/thrower.ron"),
             BuiltinSkeleton::Pusher => include_str!("../../../assets/skeletons/pusher.ron"),
+            BuiltinSkeleton::HumanoidSimbicon => {
+                include_str!("../../../assets/skeletons/humanoid-simbicon.ron")
+            }
         }
     }
 
@@ -319,6 +330,7 @@ impl BuiltinSkeleton {
             BuiltinSkeleton::Humanoid => "humanoid.ron",
             BuiltinSkeleton::Thrower => "thrower.ron",
             BuiltinSkeleton::Pusher => "pusher.ron",
+            BuiltinSkeleton::HumanoidSimbicon => "humanoid-simbicon.ron",
         }
     }
 

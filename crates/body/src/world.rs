@@ -10,7 +10,7 @@ use rapier3d::na;
 use rapier3d::prelude as rp;
 use serde::{Deserialize, Serialize};
 
-use crate::actuator::{Commands, Target, TargetFrame, TargetMix, TorqueAverage, signal_torque};
+use crate::actuator::{Commands, Target, TargetFrame, TargetMix, TorqueAverage, signal_torque, torso_torque};
 use crate::dense::SpdSystem;
 use crate::error::BodyError;
 use crate::skeleton::{DriveSpec, PdMode, Shape, Side, Skeleton};
@@ -216,6 +216,12 @@ struct Model {
     mix: Vec<TargetMix>,
     avg: Vec<TorqueAverage>,
     torque: Vec<f64>,
+    /// Per actuator: the torque it exerts in this physics step as best known (counter-clockwise; for
+    /// the implicit modes the PD torque at the current state, damping included): the τ_swing of a
+    /// torso signal.
+    applied: Vec<f64>,
+    /// Per actuator: holds a torso signal in this physics step (driven explicitly, after the others).
+    torso: Vec<bool>,
     /// Collision bits per group.
     group_bits: Vec<u32>,
 }
@@ -541,6 +547,8 @@ impl World {
             mix: vec![TargetMix::default(); n_act],
             avg: vec![TorqueAverage::default(); n_act],
             torque: vec![0.0; n_act],
+            applied: vec![0.0; n_act],
+            torso: vec![false; n_act],
             group_bits,
         });
 
@@ -763,7 +771,7 @@ impl World {
         m.commands_changed = false;
 
         read_state(physics, m);
-        gather_signals(m);
+        let any_torso = gather_signals(m);
         // Mass matrices, for body-pair actuators only (their inertia), once per physics step.
         for tree in &mut m.trees {
             if tree.needs_mass {
@@ -779,6 +787,12 @@ impl World {
             let (th, om, mix) = (m.angle[a], m.rate[a], m.mix[a]);
             // Gains as the signals' weighted mix asks (W_angle/W of kp; kd while any signal asks).
             let (kp, kd) = (spec.kp * mix.stiffness_factor(), spec.kd * mix.damping_factor());
+            if m.torso[a] {
+                // Driven by an explicit torque once every other actuator's is known: the joint
+                // hosts no spring, damper or motor in this step.
+                release_joint(physics, mode, rt.joint);
+                continue;
+            }
             let tau = match (mode, rt.joint) {
                 (PdMode::Explicit, _) => m.avg[a].torque,
                 (PdMode::OdeBrake, Some(_)) => m.avg[a].torque,
@@ -797,7 +811,8 @@ impl World {
                     );
                     mb.damping_mut()[dof] = kd as f32;
                     // Not applied by us: what the implicit spring and damper exert at this state.
-                    m.torque[a] = sign * (kp * (mix.target() - th) - kd * om);
+                    m.applied[a] = kp * (mix.target() - th) - kd * om;
+                    m.torque[a] = sign * m.applied[a];
                     continue;
                 }
                 (PdMode::ImplicitMotor, Some((handle, _))) => {
@@ -806,8 +821,9 @@ impl World {
                     data.set_motor(rp::JointAxis::AngZ, mix.target() as f32, 0.0, kp as f32, kd as f32);
                     let cap = if mix.weight > 0.0 { spec.max_torque } else { 0.0 };
                     data.set_motor_max_force(rp::JointAxis::AngZ, cap as f32);
-                    m.torque[a] =
-                        sign * (kp * (mix.target() - th) - kd * om).clamp(-spec.max_torque, spec.max_torque);
+                    m.applied[a] =
+                        (kp * (mix.target() - th) - kd * om).clamp(-spec.max_torque, spec.max_torque);
+                    m.torque[a] = sign * m.applied[a];
                     continue;
                 }
                 (PdMode::StablePd, Some((handle, dof))) => {
@@ -827,11 +843,13 @@ impl World {
                 }
             };
             m.torque[a] = sign * tau;
-            let tau = tau as f32;
-            if tau != 0.0 {
-                physics.bodies[m.handles[rt.plus]].add_torque(rp::Vector::new(0.0, 0.0, tau), false);
-                physics.bodies[m.handles[rt.minus]].add_torque(rp::Vector::new(0.0, 0.0, -tau), false);
-            }
+            // Stable PD's damping is Rapier's, implicit: what it adds is about −kd θ̇.
+            let implicit_damping = matches!((mode, rt.joint), (PdMode::StablePd, Some(_)));
+            m.applied[a] = if implicit_damping { tau - kd * om } else { tau };
+            add_torque_pair(physics, &m.handles, rt.plus, rt.minus, tau);
+        }
+        if any_torso {
+            torso_pass(physics, m);
         }
         for f in &m.forces {
             physics.bodies[m.handles[f.body]].add_force_at_point(
@@ -1066,16 +1084,20 @@ fn read_state(physics: &rp::PhysicsWorld, m: &mut Model) {
 
 /// The held signals → per actuator, the Eq. 5.1–5.2 average of clamped torques (explicit modes) and
 /// the linear mix of targets (all modes). Angles are counter-clockwise here; `sign` converts the
-/// model's convention. An actuator with a fixed target ignores the signals.
-fn gather_signals(m: &mut Model) {
+/// model's convention. An actuator with a fixed target ignores the signals. Torso signals are only
+/// marked (`Model::torso`): their torque needs the other actuators' ([`torso_pass`]). Returns whether
+/// any actuator holds one.
+fn gather_signals(m: &mut Model) -> bool {
     let sk = &m.skeleton;
     let mode = sk.actuation().mode;
     let sign = m.sign;
     // The ODE-style mode has kd = 0 in Eq. 2.1: its damping is the brake.
     let kd_of = |kd: f64| if mode == PdMode::OdeBrake { 0.0 } else { kd };
+    let mut any_torso = false;
     for (a, spec) in sk.actuators().iter().enumerate() {
         m.avg[a] = TorqueAverage::default();
         m.mix[a] = TargetMix::default();
+        m.torso[a] = false;
         if let Some(fixed) = spec.fixed_target {
             let target = sign * fixed;
             let t = signal_torque(
@@ -1095,6 +1117,11 @@ fn gather_signals(m: &mut Model) {
         let a = s.actuator;
         let spec = &sk.actuators()[a];
         if spec.fixed_target.is_some() {
+            continue;
+        }
+        if let Target::Torso { .. } = s.target {
+            m.torso[a] = true;
+            any_torso = true;
             continue;
         }
         let rt = &m.actuators[a];
@@ -1119,8 +1146,98 @@ fn gather_signals(m: &mut Model) {
                 mix.weighted_angle += s.weight * target;
             }
             Target::DampingOnly => mix.weight += s.weight,
-            Target::NoTorque => {}
+            Target::NoTorque | Target::Torso { .. } => {}
         }
+    }
+    any_torso
+}
+
+/// τ on `plus`, −τ on `minus` (counter-clockwise, N·m): an actuator's equal and opposite pair.
+fn add_torque_pair(
+    physics: &mut rp::PhysicsWorld,
+    handles: &[rp::RigidBodyHandle],
+    plus: usize,
+    minus: usize,
+    tau: f64,
+) {
+    let tau = tau as f32;
+    if tau != 0.0 {
+        physics.bodies[handles[plus]].add_torque(rp::Vector::new(0.0, 0.0, tau), false);
+        physics.bodies[handles[minus]].add_torque(rp::Vector::new(0.0, 0.0, -tau), false);
+    }
+}
+
+/// Takes the joint of an actuator that a torso signal drives out of the implicit modes for this step:
+/// no spring, no damping, no motor (the ODE-style brake, Rapier's joint friction, stays).
+fn release_joint(
+    physics: &mut rp::PhysicsWorld,
+    mode: PdMode,
+    joint: Option<(rp::MultibodyJointHandle, usize)>,
+) {
+    let Some((handle, dof)) = joint else { return };
+    let (mb, link_id) = physics.multibody_joints.get_mut(handle).expect("joint");
+    match mode {
+        PdMode::ImplicitSpring => {
+            mb.link_mut(link_id).expect("link").joint.set_spring(ANG_Z, 0.0, 0.0);
+            mb.damping_mut()[dof] = 0.0;
+        }
+        PdMode::ImplicitMotor => {
+            let data = &mut mb.link_mut(link_id).expect("link").joint.data;
+            data.set_motor(rp::JointAxis::AngZ, 0.0, 0.0, 0.0, 0.0);
+            data.set_motor_max_force(rp::JointAxis::AngZ, 0.0);
+        }
+        PdMode::StablePd => mb.damping_mut()[dof] = 0.0,
+        PdMode::Explicit | PdMode::OdeBrake => {}
+    }
+}
+
+/// The torso signals (SIMBICON's stance hip, [`Target::Torso`]), once every other actuator's torque
+/// of this physics step is known: each adds τ = −τ_torso − τ_swing to its actuator's Eq. 5.1 average
+/// (beside the explicit PD torques of any other signals it holds), and every actuator holding one
+/// applies that average as an explicit torque pair. τ_torso is the PD torque, with the actuator's
+/// own gains kp and kd, that would hold the body it pushes against (the parent of a hinge) at the
+/// signal's world angle; τ_swing is what the swing actuator exerts in this step (`Model::applied`;
+/// a swing that is itself driven by a torso signal contributes its previous step's torque).
+fn torso_pass(physics: &mut rp::PhysicsWorld, m: &mut Model) {
+    let Model {
+        skeleton,
+        sign,
+        commands,
+        actuators,
+        trees,
+        body_tree,
+        body_angle_dofs,
+        avg,
+        applied,
+        torso,
+        torque,
+        handles,
+        ..
+    } = m;
+    let sign = *sign;
+    for s in commands.signals() {
+        let Target::Torso { angle, swing } = s.target else { continue };
+        let a = s.actuator;
+        let spec = &skeleton.actuators()[a];
+        if spec.fixed_target.is_some() {
+            continue;
+        }
+        let body = actuators[a].minus;
+        let tree = &trees[body_tree[body]];
+        let dofs = &body_angle_dofs[body];
+        let theta: f64 = dofs.iter().map(|&d| tree.q[d]).sum();
+        let omega: f64 = dofs.iter().map(|&d| tree.qd[d]).sum();
+        let t = torso_torque(sign * angle, theta, omega, applied[swing], spec.kp, spec.kd, spec.max_torque);
+        avg[a].add(t, s.weight);
+    }
+    for a in 0..actuators.len() {
+        if !torso[a] {
+            continue;
+        }
+        let tau = avg[a].torque;
+        torque[a] = sign * tau;
+        applied[a] = tau;
+        add_torque_pair(physics, handles, actuators[a].plus, actuators[a].minus, tau);
     }
 }
 

@@ -469,6 +469,103 @@ fn no_torque_signals_leave_an_actuator_limp_and_world_targets_hold_world_angles(
 }
 
 // ---------------------------------------------------------------------------------------------
+// Torso signals: SIMBICON's stance hip
+
+/// Zero gravity, no ground, Δt = 0.01 s in one physics step, the figure at rest in its initial pose.
+fn floating_humanoid(mode: PdMode) -> (World, usize, Skeleton) {
+    let sk = humanoid(mode, 10.0);
+    let mut settings = WorldSettings { dt: 0.01, gravity: 0.0, ground: None, ..WorldSettings::thesis() };
+    settings.solver.iterations = 1;
+    let mut world = World::new(settings).unwrap();
+    let m = world.add_model(&sk, Placement::Offset { dx: 0.0, dy: 0.0 }).unwrap();
+    (world, m, sk)
+}
+
+/// The right hip holds the pelvis at `angle` in the world, sharing the work with the left hip, whose
+/// joint angle target is `swing_target`.
+fn torso_signals(world: &mut World, m: usize, sk: &Skeleton, angle: f64, swing_target: f64) {
+    let (hip_l, hip_r) = (sk.actuator_index("hip_l").unwrap(), sk.actuator_index("hip_r").unwrap());
+    let c = world.commands_mut(m).unwrap();
+    c.clear();
+    c.push(Signal { target: Target::Torso { angle, swing: hip_l }, ..Signal::angle(hip_r, 0.0) }).unwrap();
+    c.push(Signal::angle(hip_l, swing_target)).unwrap();
+}
+
+#[test]
+fn the_stance_hip_applies_minus_the_torso_and_the_swing_torques() {
+    // At rest in the initial pose (every angle and rate 0): the left hip asks 0.2 rad, τ_swing =
+    // kp·0.2; the right hip holds the pelvis at 0.1 rad in the world, τ_torso = kp·0.1, so it applies
+    // τ_stance = −τ_torso − τ_swing = −0.3 kp — in every mode, since a torso signal is explicit.
+    for mode in [PdMode::Explicit, PdMode::ImplicitSpring, PdMode::StablePd, PdMode::ImplicitMotor] {
+        let (mut world, m, sk) = floating_humanoid(mode);
+        let (hip_l, hip_r) = (sk.actuator_index("hip_l").unwrap(), sk.actuator_index("hip_r").unwrap());
+        torso_signals(&mut world, m, &sk, 0.1, 0.2);
+        world.step().unwrap();
+        let mut s = Sensors::new(&world, m).unwrap();
+        world.sense(&mut s).unwrap();
+        let kp = sk.actuators()[hip_r].kp;
+        assert_eq!(kp, sk.actuators()[hip_l].kp);
+        assert!(
+            (s.actuator_torque[hip_l] - 0.2 * kp).abs() < 1e-9,
+            "{mode:?}: swing {}",
+            s.actuator_torque[hip_l]
+        );
+        let stance = s.actuator_torque[hip_r];
+        assert!(
+            (stance + 0.3 * kp).abs() < 1e-9,
+            "{mode:?}: stance hip {stance} N·m, expected {}",
+            -0.3 * kp
+        );
+        // Each hip acts −τ on the pelvis: together they turn it towards 0.1 rad.
+        let pelvis = sk.body_index("pelvis").unwrap();
+        assert!(s.body_angle[pelvis] > 0.0, "{mode:?}: the pelvis turned {} rad", s.body_angle[pelvis]);
+    }
+    // Clamped like every signal (spec §4.4): a target 10 rad away asks more than the cap.
+    let (mut world, m, sk) = floating_humanoid(PdMode::ImplicitSpring);
+    torso_signals(&mut world, m, &sk, 10.0, 0.0);
+    world.step().unwrap();
+    let mut s = Sensors::new(&world, m).unwrap();
+    world.sense(&mut s).unwrap();
+    let hip_r = sk.actuator_index("hip_r").unwrap();
+    assert_eq!(s.actuator_torque[hip_r], -sk.actuators()[hip_r].max_torque);
+}
+
+#[test]
+fn a_torso_signal_turns_the_pelvis_to_its_world_angle() {
+    // Floating free, the hips can only hold the pelvis by turning the legs the other way.
+    let (mut world, m, sk) = floating_humanoid(PdMode::ImplicitSpring);
+    let pelvis = sk.body_index("pelvis").unwrap();
+    let mut s = Sensors::new(&world, m).unwrap();
+    torso_signals(&mut world, m, &sk, 0.2, 0.0);
+    for _ in 0..300 {
+        world.step().unwrap();
+    }
+    world.sense(&mut s).unwrap();
+    assert!((s.body_angle[pelvis] - 0.2).abs() < 0.02, "pelvis at {} rad, target 0.2", s.body_angle[pelvis]);
+    // The other way round too.
+    torso_signals(&mut world, m, &sk, -0.3, 0.0);
+    for _ in 0..300 {
+        world.step().unwrap();
+    }
+    world.sense(&mut s).unwrap();
+    assert!((s.body_angle[pelvis] + 0.3).abs() < 0.02, "pelvis at {} rad, target −0.3", s.body_angle[pelvis]);
+}
+
+#[test]
+fn the_simbicon_humanoid_is_the_thesis_humanoid_with_simbicon_gains() {
+    let (h, sb) = (BuiltinSkeleton::Humanoid.load(), BuiltinSkeleton::HumanoidSimbicon.load());
+    assert_eq!(h.desc().bodies, sb.desc().bodies);
+    assert_eq!(h.desc().joints, sb.desc().joints);
+    assert_eq!(h.desc().groups, sb.desc().groups);
+    assert_eq!(h.n_actuators(), sb.n_actuators());
+    for (a, b) in h.actuators().iter().zip(sb.actuators()) {
+        assert_eq!((&a.name, a.drive), (&b.name, b.drive));
+        assert_eq!((b.kp, b.kd, b.max_torque), (300.0, 30.0, 300.0), "{}", b.name);
+    }
+    assert_eq!(sb.actuation().mode, PdMode::ImplicitSpring);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Sensors
 
 #[test]
@@ -501,6 +598,15 @@ fn sensors_read_contacts_support_and_the_catalogue() {
     assert_eq!(catalogue::falling_backward(&s, 0.1), 0.0);
     assert_eq!(catalogue::flip_brake(&s, 0.1), 0.0);
     assert_eq!(catalogue::trunk_angle(&s, sk.joint_index("waist").unwrap()), s.joint_angle[2]);
+    // The ankles stand 0.25 − 0.15 m above the ground, 0.06 m behind the feet's centres.
+    for side in 0..2 {
+        let ankle = catalogue::ankle_position(&s, side).unwrap();
+        assert!(ankle[0].abs() < 5e-3 && (ankle[1] - 0.10).abs() < 5e-3, "ankle {side} at {ankle:?}");
+        let d = catalogue::com_ahead_of_ankle(&s, side);
+        assert!((d - (s.com[0] - ankle[0])).abs() < 1e-12);
+        assert!((d - catalogue::com_offset(&s, side) - 0.06).abs() < 5e-3, "{d}");
+        assert_eq!(catalogue::foot_down(&s, side), 1.0);
+    }
 }
 
 #[test]
