@@ -11,7 +11,8 @@
 //!    ([`catalogue`]), through a binding made once per sensor when the character is built; its
 //!    procedures act on the world (`release_ball` releases the hand–ball welds, `push` applies a force);
 //! 3. its target signals become the models' actuator [`Commands`](anima_body::Commands), one
-//!    [`Signal`] per signal, which the body averages by Eqs. 5.1–5.2;
+//!    [`Signal`] per signal, which the body averages by Eqs. 5.1–5.2 (a torso target — SIMBICON's
+//!    stance hip — becomes a [`Target::Torso`] whose torque the body computes at every sub-step);
 //! 4. the world advances Δt in its physics sub-steps (`WorldSettings::substeps`).
 //!
 //! Actuator names are a model's own (`hip_l`) for a one-model character, or `alias/name`
@@ -69,6 +70,8 @@ pub enum CharacterError {
     Body(#[from] BodyError),
     #[error("controller actuator `{0}` names no actuator of the world's models")]
     Actuator(String),
+    #[error("a torso target on `{actuator}` names `{swing}` as its swing: the two must drive one model")]
+    TorsoAcrossModels { actuator: String, swing: String },
     #[error("sensor `{name}`: {why}")]
     Sensor { name: String, why: String },
 }
@@ -118,6 +121,14 @@ enum Binding {
     },
     ComSpeed {
         model: usize,
+    },
+    ComAheadOfAnkle {
+        model: usize,
+        side: usize,
+    },
+    FootDown {
+        model: usize,
+        side: usize,
     },
     /// Always 0 (a sensor the adapter was told to ignore).
     Never,
@@ -180,6 +191,8 @@ impl SensorInput for BodyEnv {
             Binding::TrunkAngle { model, joint } => catalogue::trunk_angle(&s[model], joint),
             Binding::ComOffset { model, side } => catalogue::com_offset(&s[model], side),
             Binding::ComSpeed { model } => catalogue::com_speed(&s[model]),
+            Binding::ComAheadOfAnkle { model, side } => catalogue::com_ahead_of_ankle(&s[model], side),
+            Binding::FootDown { model, side } => catalogue::foot_down(&s[model], side),
             Binding::Never => 0.0,
         }
     }
@@ -300,10 +313,21 @@ impl Character {
                 }
                 "com_offset" => Binding::ComOffset { model, side: side()? },
                 "com_speed" => Binding::ComSpeed { model },
+                "com_ahead_of_ankle" => Binding::ComAheadOfAnkle { model, side: side()? },
+                "foot_down" => Binding::FootDown { model, side: side()? },
                 "never" => Binding::Never,
                 other => return Err(err(&format!("unknown sensor kind `{other}`"))),
             };
             bindings.push(b);
+        }
+        for (a, swing) in controller.torso_pairs() {
+            if actuators[a].0 != actuators[swing].0 {
+                let names = controller.actuators();
+                return Err(CharacterError::TorsoAcrossModels {
+                    actuator: names[a].clone(),
+                    swing: names[swing].clone(),
+                });
+            }
         }
         let sensors = (0..n_models).map(|m| Sensors::new(&world, m)).collect::<Result<Vec<_>, _>>()?;
         let targets = controller.new_targets();
@@ -352,6 +376,10 @@ impl Character {
                 TargetKind::Angle(a) => Target::Angle(a),
                 TargetKind::NoTorque => Target::NoTorque,
                 TargetKind::DampingOnly => Target::DampingOnly,
+                // Checked in `new`: the swing actuator drives the same model.
+                TargetKind::Torso { angle, swing } => {
+                    Target::Torso { angle, swing: self.env.actuators[swing].1 }
+                }
             };
             let frame = match s.frame {
                 Frame::Parent => TargetFrame::Parent,

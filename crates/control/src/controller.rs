@@ -5,7 +5,10 @@ use std::ops::Range;
 
 use serde::{Deserialize, Serialize};
 
-use crate::desc::{ActuatorRef, Condition, ControllerDesc, FireMode, MachineKind, ProcedureCall, TargetDesc};
+use crate::desc::{
+    ActuatorRef, Condition, ControllerDesc, FireMode, MachineDesc, MachineKind, PoseEntry, ProcedureCall,
+    SensorDesc, TargetDesc,
+};
 use crate::error::ControllerError;
 use crate::io::{Frame, SensorInput, SensorQuery, TargetKind, TargetSignal, Targets};
 use crate::optimise::{Dim, Space};
@@ -41,6 +44,11 @@ enum PoseTarget {
         start: u32,
         len: u32,
     },
+    /// SIMBICON's stance hip: the torso at world angle `angle`, with `swing`'s torque taken off.
+    Torso {
+        angle: ParamId,
+        swing: usize,
+    },
     NoTorque,
     DampingOnly,
 }
@@ -54,7 +62,8 @@ struct PoseItem {
 #[derive(Debug, Clone, PartialEq)]
 struct StateDef {
     name: String,
-    pose: usize,
+    /// The pose in each phase of the machine's roles (the same index twice without roles).
+    pose: [usize; 2],
     procedure: Option<usize>,
 }
 
@@ -68,9 +77,12 @@ enum Cond {
 #[derive(Debug, Clone, PartialEq)]
 struct TransitionDef {
     name: String,
-    cond: Cond,
+    /// The condition in each phase of the machine's roles (a sensory one reads the phase's sensor).
+    cond: [Cond; 2],
     delay: ParamId,
     procedure: Option<usize>,
+    /// Switches the machine's roles to the other phase.
+    swap_roles: bool,
 }
 
 /// The pose a machine blends from (P_anterior of Eq. 5.3), one entry per actuator of the previous
@@ -96,6 +108,8 @@ struct MachineRt {
     prev: Vec<PrevEntry>,
     /// The current outgoing (method) transition was invoked.
     triggered: bool,
+    /// The phase of the machine's roles: 0 as declared, 1 swapped.
+    phase: usize,
 }
 
 /// One state machine (spec §6.4).
@@ -108,6 +122,7 @@ pub struct Machine {
     poses: Vec<Vec<PoseItem>>,
     states: Vec<StateDef>,
     transitions: Vec<TransitionDef>,
+    roles: bool,
     rt: MachineRt,
 }
 
@@ -157,6 +172,17 @@ impl Machine {
     /// transition that led to it.
     pub fn interpolation(&self) -> (u32, u32) {
         (self.rt.n, self.rt.d_in)
+    }
+
+    /// The phase of the machine's roles while it runs: 0 (as declared) or 1 (swapped); always 0 for a
+    /// machine without roles.
+    pub fn phase(&self) -> Option<usize> {
+        self.rt.running.then_some(self.rt.phase)
+    }
+
+    /// Whether the machine has roles that swap.
+    pub fn has_roles(&self) -> bool {
+        self.roles
     }
 }
 
@@ -326,6 +352,227 @@ impl Builder<'_> {
     }
 }
 
+/// A machine's roles, resolved (spec extension for SIMBICON, see [`crate::RolesDesc`]): each actuator
+/// role's actuator in the two phases, and each argument role's argument.
+struct Roles {
+    actuators: Vec<(String, [usize; 2])>,
+    args: Vec<(String, [String; 2])>,
+}
+
+impl Roles {
+    /// Checks and resolves machine `m`'s roles (none: no roles).
+    fn compile(md: &MachineDesc, actuators: &[String], m: usize) -> Result<Self, ControllerError> {
+        let mut roles = Roles { actuators: Vec::new(), args: Vec::new() };
+        let Some(rd) = &md.roles else { return Ok(roles) };
+        let at = |f: String| format!("machines[{m}].roles.{f}");
+        for (i, (role, first, second)) in rd.actuators.iter().enumerate() {
+            let path = at(format!("actuators[{i}]"));
+            if role.is_empty() || actuators.contains(role) {
+                return Err(inv(
+                    path,
+                    format!("role `{role}` needs a name of its own (not empty, not one of the actuators)"),
+                ));
+            }
+            if roles.actuators.iter().any(|(r, _)| r == role) {
+                return Err(inv(path, format!("a second role named `{role}`")));
+            }
+            let pair = [actuator_index(first, actuators, &path)?, actuator_index(second, actuators, &path)?];
+            roles.actuators.push((role.clone(), pair));
+        }
+        for (i, (role, first, second)) in rd.args.iter().enumerate() {
+            let path = at(format!("args[{i}]"));
+            if role.is_empty() || roles.args.iter().any(|(r, _)| r == role) {
+                return Err(inv(path, format!("argument role `{role}` is empty or named twice")));
+            }
+            roles.args.push((role.clone(), [first.clone(), second.clone()]));
+        }
+        Ok(roles)
+    }
+
+    /// An actuator by role (the same in both phases when it names no role) and the name its
+    /// parameters' labels use: the role's, else the actuator's.
+    fn actuator(
+        &self,
+        r: &ActuatorRef,
+        actuators: &[String],
+        path: &str,
+    ) -> Result<([usize; 2], String), ControllerError> {
+        if let ActuatorRef::Name(n) = r
+            && let Some((role, pair)) = self.actuators.iter().find(|(role, _)| role == n)
+        {
+            return Ok((*pair, role.clone()));
+        }
+        let a = actuator_index(r, actuators, path).map_err(|e| {
+            if self.actuators.is_empty() {
+                e
+            } else {
+                let names: Vec<String> = self.actuators.iter().map(|(r, _)| r.clone()).collect();
+                inv(path, format!("{}; the machine's roles: {}", e.message, list(&names)))
+            }
+        })?;
+        Ok(([a, a], actuators[a].clone()))
+    }
+
+    /// A sensor's arguments in phase `p`: each argument that names a role replaced by its argument.
+    fn args(&self, args: &[String], p: usize) -> Vec<String> {
+        args.iter()
+            .map(|a| self.args.iter().find(|(r, _)| r == a).map_or_else(|| a.clone(), |(_, v)| v[p].clone()))
+            .collect()
+    }
+
+    /// Adds the sensor `sd` asks for, with parameters `params`: one sensor, or one per phase when a
+    /// role argument makes the phases read different sensors. Returns the sensor of each phase.
+    fn sensors(
+        &self,
+        sensors: &mut Vec<Sensor>,
+        name: String,
+        sd: &SensorDesc,
+        params: Range<usize>,
+    ) -> [usize; 2] {
+        let [first, second] = [self.args(&sd.args, 0), self.args(&sd.args, 1)];
+        let swapped = first != second;
+        let second_name = format!("{name} (roles swapped)");
+        sensors.push(Sensor { name, kind: sd.kind.clone(), args: first, params: params.clone() });
+        let id = sensors.len() - 1;
+        if !swapped {
+            return [id, id];
+        }
+        sensors.push(Sensor { name: second_name, kind: sd.kind.clone(), args: second, params });
+        [id, id + 1]
+    }
+}
+
+/// An actuator by name or index.
+fn actuator_index(r: &ActuatorRef, actuators: &[String], path: &str) -> Result<usize, ControllerError> {
+    let n_act = actuators.len();
+    match r {
+        ActuatorRef::Index(i) if *i < n_act => Ok(*i),
+        ActuatorRef::Index(i) => Err(inv(
+            path,
+            format!("actuator index {i} is out of range (the controller has {n_act} actuators)"),
+        )),
+        ActuatorRef::Name(n) => actuators.iter().position(|a| a == n).ok_or_else(|| {
+            inv(path, format!("unknown actuator `{n}`; the controller's actuators are: {}", list(actuators)))
+        }),
+    }
+}
+
+/// What compiling one state's pose entries needs to know.
+struct PoseCtx<'a> {
+    actuators: &'a [String],
+    roles: &'a Roles,
+    owner: ParamOwner,
+    auto: bool,
+    n_phases: usize,
+}
+
+impl PoseCtx<'_> {
+    /// One pose entry, as an item per phase (the second a copy without roles): its parameters are
+    /// registered once, in the order of [`for_each_param_mut`]; feedback terms and sensors are added
+    /// per phase where a role argument makes the phases differ.
+    fn item(
+        &self,
+        b: &mut Builder,
+        sensors: &mut Vec<Sensor>,
+        feedback: &mut Vec<(ParamId, usize)>,
+        entry: &PoseEntry,
+        path: String,
+        label_of: impl Fn(&str) -> String,
+    ) -> Result<[PoseItem; 2], ControllerError> {
+        let (actuator, name) = self.roles.actuator(&entry.0, self.actuators, &path)?;
+        let label = label_of(&name);
+        let (owner, auto) = (self.owner, self.auto);
+        let target: [PoseTarget; 2] = match &entry.1 {
+            TargetDesc::Angle(p) => {
+                [PoseTarget::Angle(
+                    b.param(p, ParamKind::TargetAngle, path, label, owner, auto)?,
+                    Frame::Parent,
+                ); 2]
+            }
+            TargetDesc::WorldAngle(p) => {
+                [PoseTarget::Angle(
+                    b.param(p, ParamKind::TargetAngle, path, label, owner, auto)?,
+                    Frame::World,
+                ); 2]
+            }
+            TargetDesc::Feedback(fd) => {
+                let base = b.param(
+                    &fd.base,
+                    ParamKind::TargetAngle,
+                    format!("{path}.base"),
+                    label.clone(),
+                    owner,
+                    auto,
+                )?;
+                let mut terms: Vec<(ParamId, [usize; 2])> = Vec::with_capacity(fd.terms.len());
+                for (i, term) in fd.terms.iter().enumerate() {
+                    let tpath = format!("{path}.terms[{i}]");
+                    if term.sensor.kind.is_empty() {
+                        return Err(inv(
+                            format!("{tpath}.sensor.kind"),
+                            "a sensor needs a kind (the computation to run)",
+                        ));
+                    }
+                    let gain = b.param(
+                        &term.gain,
+                        ParamKind::FeedbackGain,
+                        format!("{tpath}.gain"),
+                        format!("{label}/k{i}"),
+                        owner,
+                        auto,
+                    )?;
+                    let first = b.values.len();
+                    for (j, p) in term.sensor.params.iter().enumerate() {
+                        b.param(
+                            p,
+                            ParamKind::SensorParam,
+                            format!("{tpath}.sensor.params[{j}]"),
+                            format!("{label}/k{i}/p{j}"),
+                            owner,
+                            auto,
+                        )?;
+                    }
+                    let ids = self.roles.sensors(
+                        sensors,
+                        format!("{label}/k{i}"),
+                        &term.sensor,
+                        first..b.values.len(),
+                    );
+                    terms.push((gain, ids));
+                }
+                let frame = if fd.world { Frame::World } else { Frame::Parent };
+                let len = fd.terms.len() as u32;
+                let mut starts = [feedback.len() as u32; 2];
+                feedback.extend(terms.iter().map(|&(gain, ids)| (gain, ids[0])));
+                if self.n_phases == 2 && terms.iter().any(|(_, ids)| ids[0] != ids[1]) {
+                    starts[1] = feedback.len() as u32;
+                    feedback.extend(terms.iter().map(|&(gain, ids)| (gain, ids[1])));
+                }
+                starts.map(|start| PoseTarget::Feedback { base, frame, start, len })
+            }
+            TargetDesc::Torso(td) => {
+                let angle =
+                    b.param(&td.angle, ParamKind::TargetAngle, format!("{path}.angle"), label, owner, auto)?;
+                let spath = format!("{path}.swing");
+                let (swing, _) = self.roles.actuator(&td.swing, self.actuators, &spath)?;
+                if swing.iter().zip(&actuator).take(self.n_phases).any(|(s, a)| s == a) {
+                    return Err(inv(
+                        spath,
+                        format!(
+                            "the swing actuator must be another one than `{name}`, which holds the torso: the \
+                             two share the torque that holds it"
+                        ),
+                    ));
+                }
+                swing.map(|swing| PoseTarget::Torso { angle, swing })
+            }
+            TargetDesc::NoTorque => [PoseTarget::NoTorque; 2],
+            TargetDesc::DampingOnly => [PoseTarget::DampingOnly; 2],
+        };
+        Ok([0, 1].map(|p| PoseItem { actuator: actuator[p], target: target[p] }))
+    }
+}
+
 fn inv(field: impl Into<String>, message: impl Into<String>) -> ControllerError {
     ControllerError::invalid(field, message)
 }
@@ -355,7 +602,6 @@ impl Controller {
     fn build(desc: ControllerDesc, proc_names: &[String]) -> Result<Self, ControllerError> {
         let mut b = Builder { params: Vec::new(), values: Vec::new(), calls: Vec::new(), proc_names };
         let mut warnings = Vec::new();
-        let n_act = desc.actuators.len();
         if let Some((i, n)) = duplicate(desc.actuators.iter().map(String::as_str)) {
             return Err(inv(format!("actuators[{i}]"), format!("a second actuator named `{n}`")));
         }
@@ -447,9 +693,12 @@ impl Controller {
                 return Err(inv(at(&format!("states[{i}].name")), format!("a second state named `{n}`")));
             }
 
-            // Poses: states with their own pose first, then the shared ones.
+            // Poses: states with their own pose first, then the shared ones; with roles, each pose
+            // once per phase, over the same parameters.
+            let roles = Roles::compile(md, &desc.actuators, m)?;
+            let n_phases = if md.roles.is_some() { 2 } else { 1 };
             let mut poses: Vec<Vec<PoseItem>> = Vec::new();
-            let mut pose_of = vec![usize::MAX; md.states.len()];
+            let mut pose_of = vec![[usize::MAX; 2]; md.states.len()];
             for (s, sd) in md.states.iter().enumerate() {
                 if sd.same_pose_as.is_some() {
                     if !sd.pose.is_empty() {
@@ -460,109 +709,39 @@ impl Controller {
                     }
                     continue;
                 }
-                let owner = ParamOwner::State { machine: m, state: s };
-                let auto = md.auto && sd.auto;
-                let mut items: Vec<PoseItem> = Vec::with_capacity(sd.pose.len());
+                let ctx = PoseCtx {
+                    actuators: &desc.actuators,
+                    roles: &roles,
+                    owner: ParamOwner::State { machine: m, state: s },
+                    auto: md.auto && sd.auto,
+                    n_phases,
+                };
+                let mut items: [Vec<PoseItem>; 2] =
+                    [Vec::with_capacity(sd.pose.len()), Vec::with_capacity(sd.pose.len())];
                 for (e, entry) in sd.pose.iter().enumerate() {
                     let path = at(&format!("states[{s}].pose[{e}]"));
-                    let actuator = match &entry.0 {
-                        ActuatorRef::Index(i) if *i < n_act => *i,
-                        ActuatorRef::Index(i) => {
+                    let label_of = |name: &str| format!("{}/{}/{name}", md.name, sd.name);
+                    let new = ctx.item(&mut b, &mut sensors, &mut feedback, entry, path, label_of)?;
+                    for (p, item) in new.iter().enumerate().take(n_phases) {
+                        if items[p].iter().any(|it| it.actuator == item.actuator) {
+                            let phase = if p == 1 { " (with the roles swapped)" } else { "" };
                             return Err(inv(
-                                path,
+                                at(&format!("states[{s}].pose[{e}]")),
                                 format!(
-                                    "actuator index {i} is out of range (the controller has {n_act} actuators)"
+                                    "actuator {} appears twice in this pose{phase}",
+                                    desc.actuators[item.actuator]
                                 ),
                             ));
                         }
-                        ActuatorRef::Name(n) => match desc.actuators.iter().position(|a| a == n) {
-                            Some(i) => i,
-                            None => {
-                                return Err(inv(
-                                    path,
-                                    format!(
-                                        "unknown actuator `{n}`; the controller's actuators are: {}",
-                                        list(&desc.actuators)
-                                    ),
-                                ));
-                            }
-                        },
-                    };
-                    if items.iter().any(|it| it.actuator == actuator) {
-                        return Err(inv(
-                            path,
-                            format!("actuator {} appears twice in this pose", desc.actuators[actuator]),
-                        ));
+                        items[p].push(*item);
                     }
-                    let label = format!("{}/{}/{}", md.name, sd.name, desc.actuators[actuator]);
-                    let target = match &entry.1 {
-                        TargetDesc::Angle(p) => PoseTarget::Angle(
-                            b.param(p, ParamKind::TargetAngle, path, label, owner, auto)?,
-                            Frame::Parent,
-                        ),
-                        TargetDesc::WorldAngle(p) => PoseTarget::Angle(
-                            b.param(p, ParamKind::TargetAngle, path, label, owner, auto)?,
-                            Frame::World,
-                        ),
-                        TargetDesc::Feedback(fd) => {
-                            let base = b.param(
-                                &fd.base,
-                                ParamKind::TargetAngle,
-                                format!("{path}.base"),
-                                label.clone(),
-                                owner,
-                                auto,
-                            )?;
-                            let start = feedback.len();
-                            for (i, term) in fd.terms.iter().enumerate() {
-                                let tpath = format!("{path}.terms[{i}]");
-                                if term.sensor.kind.is_empty() {
-                                    return Err(inv(
-                                        format!("{tpath}.sensor.kind"),
-                                        "a sensor needs a kind (the computation to run)",
-                                    ));
-                                }
-                                let gain = b.param(
-                                    &term.gain,
-                                    ParamKind::FeedbackGain,
-                                    format!("{tpath}.gain"),
-                                    format!("{label}/k{i}"),
-                                    owner,
-                                    auto,
-                                )?;
-                                let first = b.values.len();
-                                for (j, p) in term.sensor.params.iter().enumerate() {
-                                    b.param(
-                                        p,
-                                        ParamKind::SensorParam,
-                                        format!("{tpath}.sensor.params[{j}]"),
-                                        format!("{label}/k{i}/p{j}"),
-                                        owner,
-                                        auto,
-                                    )?;
-                                }
-                                sensors.push(Sensor {
-                                    name: format!("{label}/k{i}"),
-                                    kind: term.sensor.kind.clone(),
-                                    args: term.sensor.args.clone(),
-                                    params: first..b.values.len(),
-                                });
-                                feedback.push((gain, sensors.len() - 1));
-                            }
-                            PoseTarget::Feedback {
-                                base,
-                                frame: if fd.world { Frame::World } else { Frame::Parent },
-                                start: start as u32,
-                                len: fd.terms.len() as u32,
-                            }
-                        }
-                        TargetDesc::NoTorque => PoseTarget::NoTorque,
-                        TargetDesc::DampingOnly => PoseTarget::DampingOnly,
-                    };
-                    items.push(PoseItem { actuator, target });
                 }
-                pose_of[s] = poses.len();
-                poses.push(items);
+                let [first, second] = items;
+                pose_of[s] = [poses.len(), poses.len() + n_phases - 1];
+                poses.push(first);
+                if n_phases == 2 {
+                    poses.push(second);
+                }
             }
             for (s, sd) in md.states.iter().enumerate() {
                 let Some(other) = &sd.same_pose_as else { continue };
@@ -582,20 +761,6 @@ impl Controller {
                 let procedure = b.call(&sd.procedure, at(&format!("states[{s}].procedure")))?;
                 states.push(StateDef { name: sd.name.clone(), pose: pose_of[s], procedure });
             }
-            // Spec §6.5: blends are meant between poses listing the same actuators.
-            for s in 0..states.len() {
-                let (p, q) = (&poses[states[s].pose], &poses[states[(s + 1) % states.len()].pose]);
-                let same = p.len() == q.len() && p.iter().all(|a| q.iter().any(|b| b.actuator == a.actuator));
-                if !same {
-                    warnings.push(format!(
-                        "machine `{}`: states `{}` and `{}` pose different actuator sets; actuators only in \
-                         the new pose start at once, those only in the old one are dropped",
-                        md.name,
-                        states[s].name,
-                        states[(s + 1) % states.len()].name
-                    ));
-                }
-            }
 
             let mut transitions = Vec::with_capacity(md.transitions.len());
             for (t, td) in md.transitions.iter().enumerate() {
@@ -603,6 +768,12 @@ impl Controller {
                 let name = if td.name.is_empty() { format!("T{}", t + 1) } else { td.name.clone() };
                 if transitions.iter().any(|o: &TransitionDef| o.name == name) {
                     return Err(inv(tat("name"), format!("a second transition named `{name}`")));
+                }
+                if td.swap_roles && md.roles.is_none() {
+                    return Err(inv(
+                        tat("swap_roles"),
+                        format!("machine `{}` has no roles to swap; give it `roles`", md.name),
+                    ));
                 }
                 let owner = ParamOwner::Transition { machine: m, transition: t };
                 let auto = md.auto && td.auto;
@@ -615,15 +786,17 @@ impl Controller {
                     auto,
                 )?;
                 let cond = match &td.when {
-                    Condition::Temporal(p) => Cond::Temporal(b.param(
-                        p,
-                        ParamKind::Time,
-                        tat("when"),
-                        format!("{}/{name}/time", md.name),
-                        owner,
-                        auto,
-                    )?),
-                    Condition::Method => Cond::Method,
+                    Condition::Temporal(p) => {
+                        [Cond::Temporal(b.param(
+                            p,
+                            ParamKind::Time,
+                            tat("when"),
+                            format!("{}/{name}/time", md.name),
+                            owner,
+                            auto,
+                        )?); 2]
+                    }
+                    Condition::Method => [Cond::Method; 2],
                     Condition::Sensory(sd) => {
                         if sd.kind.is_empty() {
                             return Err(inv(
@@ -637,17 +810,37 @@ impl Controller {
                             let label = format!("{}/{name}/p{i}", md.name);
                             b.param(p, ParamKind::SensorParam, path, label, owner, auto)?;
                         }
-                        sensors.push(Sensor {
-                            name: format!("{}/{name}", md.name),
-                            kind: sd.kind.clone(),
-                            args: sd.args.clone(),
-                            params: start..b.values.len(),
-                        });
-                        Cond::Sensory(sensors.len() - 1)
+                        let ids = roles.sensors(
+                            &mut sensors,
+                            format!("{}/{name}", md.name),
+                            sd,
+                            start..b.values.len(),
+                        );
+                        ids.map(Cond::Sensory)
                     }
                 };
                 let procedure = b.call(&td.procedure, tat("procedure"))?;
-                transitions.push(TransitionDef { name, cond, delay, procedure });
+                transitions.push(TransitionDef { name, cond, delay, procedure, swap_roles: td.swap_roles });
+            }
+            if md.roles.is_some() && !transitions.iter().any(|t| t.swap_roles) {
+                warnings.push(format!(
+                    "machine `{}` has roles, but no transition swaps them (`swap_roles: true`)",
+                    md.name
+                ));
+            }
+            // Spec §6.5: blends are meant between poses listing the same actuators.
+            for s in 0..states.len() {
+                let next = (s + 1) % states.len();
+                let phase = usize::from(transitions[s].swap_roles);
+                let (p, q) = (&poses[states[s].pose[0]], &poses[states[next].pose[phase]]);
+                let same = p.len() == q.len() && p.iter().all(|a| q.iter().any(|b| b.actuator == a.actuator));
+                if !same {
+                    warnings.push(format!(
+                        "machine `{}`: states `{}` and `{}` pose different actuator sets; actuators only in \
+                         the new pose start at once, those only in the old one are dropped",
+                        md.name, states[s].name, states[next].name
+                    ));
+                }
             }
             let max_pose = poses.iter().map(Vec::len).max().unwrap_or(0);
             machines.push(Machine {
@@ -658,6 +851,7 @@ impl Controller {
                 poses,
                 states,
                 transitions,
+                roles: md.roles.is_some(),
                 rt: MachineRt { prev: Vec::with_capacity(max_pose), ..MachineRt::default() },
             });
         }
@@ -748,6 +942,20 @@ impl Controller {
     /// The most signals one iteration can produce.
     pub fn max_signals(&self) -> usize {
         self.max_signals
+    }
+
+    /// Every (actuator, swing actuator) pair a torso target may send ([`TargetKind::Torso`]), in
+    /// either phase of its machine's roles: what a caller checks once, e.g. that both drive one body.
+    pub fn torso_pairs(&self) -> Vec<(usize, usize)> {
+        let mut pairs = Vec::new();
+        for item in self.machines.iter().flat_map(|m| m.poses.iter().flatten()) {
+            if let PoseTarget::Torso { swing, .. } = item.target
+                && !pairs.contains(&(item.actuator, swing))
+            {
+                pairs.push((item.actuator, swing));
+            }
+        }
+        pairs
     }
 
     // ---- parameters -------------------------------------------------------------------------
@@ -867,7 +1075,7 @@ impl Controller {
         let Some(m) = self.machines.get_mut(machine) else { return false };
         let ok = m.rt.running
             && m.rt.state == transition
-            && matches!(m.transitions.get(transition).map(|t| t.cond), Some(Cond::Method));
+            && matches!(m.transitions.get(transition).map(|t| t.cond[m.rt.phase]), Some(Cond::Method));
         if ok {
             m.rt.triggered = true;
         }
@@ -887,6 +1095,7 @@ impl Controller {
             m.rt.has_prev = false;
             m.rt.prev.clear();
             m.rt.triggered = false;
+            m.rt.phase = 0;
         }
         for k in 0..self.machine_sensors.len() {
             let delay = self.count(self.machine_sensors[k].oscillation_delay);
@@ -913,7 +1122,7 @@ impl Controller {
                     .sum();
                 (self.values[base.0] + sum, frame)
             }
-            PoseTarget::NoTorque | PoseTarget::DampingOnly => (0.0, Frame::Parent),
+            PoseTarget::Torso { .. } | PoseTarget::NoTorque | PoseTarget::DampingOnly => (0.0, Frame::Parent),
         }
     }
 
@@ -1019,6 +1228,7 @@ impl Controller {
                 rt.has_prev = false;
                 rt.prev.clear();
                 rt.triggered = false;
+                rt.phase = 0;
             }
             rt.ran_now = true;
         }
@@ -1033,7 +1243,8 @@ impl Controller {
         let weight = self.values[mach.weight.0];
         let blend = rt.has_prev && rt.n < rt.d_in;
         let alpha = if blend { f64::from(rt.n) / f64::from(rt.d_in) } else { 1.0 };
-        for (e, item) in mach.poses[mach.states[s].pose].iter().enumerate() {
+        let phase = rt.phase;
+        for (e, item) in mach.poses[mach.states[s].pose[phase]].iter().enumerate() {
             let (target, frame) = match item.target {
                 PoseTarget::Angle(..) | PoseTarget::Feedback { .. } => {
                     let (new, frame) = self.pose_angle(item.target, env);
@@ -1046,6 +1257,10 @@ impl Controller {
                     };
                     (TargetKind::Angle(a), frame)
                 }
+                // Not blended: SIMBICON switches its poses at once.
+                PoseTarget::Torso { angle, swing } => {
+                    (TargetKind::Torso { angle: self.values[angle.0], swing }, Frame::World)
+                }
                 PoseTarget::NoTorque => (TargetKind::NoTorque, Frame::Parent),
                 PoseTarget::DampingOnly => (TargetKind::DampingOnly, Frame::Parent),
             };
@@ -1056,7 +1271,8 @@ impl Controller {
         // Check the outgoing transition: only once the blend is complete (spec §6.5).
         let (n, d_in) = (rt.n, rt.d_in);
         let tr = &mach.transitions[s];
-        let (cond, delay, procedure) = (tr.cond, tr.delay, tr.procedure);
+        let (cond, delay, procedure) = (tr.cond[phase], tr.delay, tr.procedure);
+        let next_phase = phase ^ usize::from(tr.swap_roles);
         let mut value = 0.0;
         let fires = n >= d_in
             && match cond {
@@ -1073,11 +1289,12 @@ impl Controller {
                 self.fire(call, env, procs, value, Origin::Transition { machine: m, transition: s });
             }
             let next = (s + 1) % self.machines[m].states.len();
-            self.snapshot(m, s, next, env);
+            self.snapshot(m, (s, phase), (next, next_phase), env);
             let d = self.count(delay);
             let rt = &mut self.machines[m].rt;
             rt.d_in = d;
             rt.state = next;
+            rt.phase = next_phase;
             rt.n = 0;
             rt.triggered = false;
             rt.has_prev = true;
@@ -1088,10 +1305,17 @@ impl Controller {
     }
 
     /// Keeps state `s`'s pose (fully reached: transitions wait for the blend) as P_anterior for the
-    /// next state. An entry that was NoTorque/DampingOnly, or in another frame, and becomes an angle
-    /// starts from the measured angle (spec §6.5).
-    fn snapshot<E: SensorInput>(&mut self, m: usize, s: usize, next: usize, env: &mut E) {
-        let pose = self.machines[m].states[s].pose;
+    /// next state. An entry that was NoTorque/DampingOnly/Torso, or in another frame, and becomes an
+    /// angle starts from the measured angle (spec §6.5). States come with the phase of the roles they
+    /// are posed in.
+    fn snapshot<E: SensorInput>(
+        &mut self,
+        m: usize,
+        (s, phase): (usize, usize),
+        (next, next_phase): (usize, usize),
+        env: &mut E,
+    ) {
+        let pose = self.machines[m].states[s].pose[phase];
         self.machines[m].rt.prev.clear();
         for k in 0..self.machines[m].poses[pose].len() {
             let item = self.machines[m].poses[pose][k];
@@ -1106,7 +1330,7 @@ impl Controller {
         }
         let mach = &mut self.machines[m];
         let rt = &mut mach.rt;
-        for item in &mach.poses[mach.states[next].pose] {
+        for item in &mach.poses[mach.states[next].pose[next_phase]] {
             let frame = match item.target {
                 PoseTarget::Angle(_, frame) | PoseTarget::Feedback { frame, .. } => frame,
                 _ => continue,
@@ -1149,6 +1373,7 @@ fn for_each_param_mut(desc: &mut ControllerDesc, f: &mut impl FnMut(&mut Param))
                             t.sensor.params.iter_mut().for_each(&mut *f);
                         }
                     }
+                    TargetDesc::Torso(td) => f(&mut td.angle),
                     TargetDesc::NoTorque | TargetDesc::DampingOnly => {}
                 }
             }

@@ -12,6 +12,10 @@ fn yes() -> bool {
     true
 }
 
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
 fn one() -> Param {
     Param::fixed(1.0)
 }
@@ -120,8 +124,40 @@ pub struct MachineDesc {
     /// Automatically modifiable (spec §7.2).
     #[serde(default = "yes")]
     pub auto: bool,
+    /// Roles that swap between two phases (SIMBICON's stance and swing legs): pose entries and sensor
+    /// arguments may name a role instead of an actuator or an argument, and a transition with
+    /// `swap_roles` exchanges the two phases' assignments. `None`: no roles, one phase (and nothing
+    /// written, so that controllers without roles read and write as they did before roles).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roles: Option<RolesDesc>,
     pub states: Vec<StateDesc>,
     pub transitions: Vec<TransitionDesc>,
+}
+
+/// The roles of a machine (an anima extension for SIMBICON, Yin et al. 2007): who plays each role in
+/// the machine's first phase and who in its second. A machine starts in the first phase; each
+/// transition with `swap_roles: true` switches to the other. SIMBICON's four states are then two
+/// states written once for "the stance leg" and "the swing leg", with the parameters shared by both
+/// sides:
+///
+/// ```ron
+/// roles: Some(Roles(
+///     actuators: [("stance_hip", "hip_l", "hip_r"), ("swing_hip", "hip_r", "hip_l")],
+///     args: [("stance", "left", "right"), ("swing", "right", "left")],
+/// )),
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Roles", deny_unknown_fields)]
+pub struct RolesDesc {
+    /// (role, the actuator that plays it in the first phase, the one in the second). A pose entry or
+    /// a torso target's `swing` may name the role.
+    #[serde(default)]
+    pub actuators: Vec<(String, ActuatorRef, ActuatorRef)>,
+    /// (role, the sensor argument that plays it in the first phase, the one in the second): an
+    /// argument of a feedback term's or a sensory transition's sensor that names the role is
+    /// replaced by the phase's argument (`"stance"` → `"left"`).
+    #[serde(default)]
+    pub args: Vec<(String, String, String)>,
 }
 
 /// A state: a pose on any subset of the actuators and an optional procedure fired in every iteration
@@ -158,6 +194,10 @@ pub enum TargetDesc {
     /// extension for SIMBICON-style control: e.g. the swing hip's world angle θ₀ + c_d·d + c_v·v with
     /// d, v the centre of mass's offset from and speed over the stance foot).
     Feedback(FeedbackDesc),
+    /// SIMBICON's stance hip (Yin et al. 2007; an anima extension): no target of its own, but the
+    /// torque that holds the actuator's parent body (the torso, for a hip) at a world angle through
+    /// this actuator, τ = −τ_torso − τ_swing, with τ_swing the torque of the other hip.
+    Torso(TorsoDesc),
     /// Apply no torque for this pose.
     NoTorque,
     /// Damping only (hold the current angle).
@@ -176,6 +216,17 @@ pub struct FeedbackDesc {
     #[serde(default)]
     pub world: bool,
     pub terms: Vec<FeedbackTerm>,
+}
+
+/// A torso target: `Torso((angle: 0.0, swing: "swing_hip"))`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TorsoDesc {
+    /// The torso's world angle, rad.
+    pub angle: Param,
+    /// The other actuator on the torso (the swing hip), by name, index or role; its torque is taken
+    /// off, so that the two together hold the torso.
+    pub swing: ActuatorRef,
 }
 
 /// One term of a feedback target: a gain times a sensor's return value.
@@ -250,6 +301,10 @@ pub struct TransitionDesc {
     pub delay: Param,
     #[serde(default)]
     pub procedure: Option<ProcedureCall>,
+    /// Switch the machine's roles to the other phase when this transition fires (SIMBICON's foot
+    /// strike); only in a machine with `roles`. Written only when set.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub swap_roles: bool,
     #[serde(default = "yes")]
     pub auto: bool,
 }

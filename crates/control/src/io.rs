@@ -60,6 +60,10 @@ pub enum TargetKind {
     NoTorque,
     /// Damping only: T = −kd θ̇.
     DampingOnly,
+    /// SIMBICON's stance hip: the torque τ = −τ_torso − τ_swing that holds the actuator's parent
+    /// body (the torso) at world angle `angle` (rad) with actuator `swing` (an index in the
+    /// controller's `actuators`) applying τ_swing. The body computes it at every physics sub-step.
+    Torso { angle: f64, swing: usize },
 }
 
 /// One target for one actuator from one running machine, with the machine's weight P_ME.

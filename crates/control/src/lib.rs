@@ -5,9 +5,11 @@
 //!
 //! A [`Controller`] is a set of state machines, each driving any subset of a character's actuators,
 //! plus a set of sensors (spec §6.1). Every machine owns a cyclic vector of states; a state holds a
-//! *pose* (a target per actuator: a joint angle, a world angle, no torque, or damping only) and the
-//! transitions between states fire after a time, when a sensor turns non-zero, or when someone calls
-//! a method. While a pose changes it is blended linearly over the transition's interpolation delay
+//! *pose* (a target per actuator: a joint angle, a world angle, a balance-feedback expression, a torso
+//! target, no torque, or damping only) and the transitions between states fire after a time, when a
+//! sensor turns non-zero, or when someone calls a method. SIMBICON (Yin et al. 2007) is a machine with
+//! *roles* — the stance and swing legs — that a transition swaps, and a *torso* target on the stance
+//! hip, whose torque the body computes as −τ_torso − τ_swing (`docs/control.md`). While a pose changes it is blended linearly over the transition's interpolation delay
 //! (Eq. 5.3). Machines are *constant* (always run), *sensory* (run while their sensor is active) or
 //! *default* (run while no sensory machine's sensor is active); several may drive one actuator, and
 //! their targets are averaged by machine weight (Eqs. 5.1–5.2). Procedures — named Rust functions
@@ -81,7 +83,8 @@ mod procedure;
 pub use controller::{Controller, Machine, MachineSensor, MachineType, Scope, Selection, Sensor};
 pub use desc::{
     ActuatorRef, Condition, ControllerDesc, FeedbackDesc, FeedbackTerm, FireMode, MachineDesc, MachineKind,
-    MachineSensorDesc, PoseEntry, ProcedureCall, SensorDesc, StateDesc, TargetDesc, TransitionDesc,
+    MachineSensorDesc, PoseEntry, ProcedureCall, RolesDesc, SensorDesc, StateDesc, TargetDesc, TorsoDesc,
+    TransitionDesc,
 };
 pub use error::{ControllerError, ControllerErrorKind};
 pub use io::{Frame, SensorInput, SensorQuery, TargetKind, TargetSignal, Targets};

@@ -34,6 +34,8 @@ const CATALOGUE: &[&str] = &[
     "both_feet_down",
     "com_offset",
     "com_speed",
+    "com_ahead_of_ankle",
+    "foot_down",
 ];
 
 #[test]

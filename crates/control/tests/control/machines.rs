@@ -211,7 +211,7 @@ fn several_machines_on_one_actuator_are_averaged_by_weight() {
     let torque = |s: &anima_control::TargetSignal| match s.target {
         TargetKind::Angle(a) => Some(10.0 * (a - 0.1)),
         TargetKind::DampingOnly => Some(0.0),
-        TargetKind::NoTorque => None,
+        TargetKind::NoTorque | TargetKind::Torso { .. } => None,
     };
     let tb = t.weighted_mean(1, torque).unwrap();
     assert!((tb - 10.0 * 0.1 * 1.0 / 4.0).abs() < 1e-12, "{tb}");

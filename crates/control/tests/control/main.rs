@@ -3,3 +3,4 @@
 mod files;
 mod machines;
 mod optimise;
+mod roles;
