@@ -35,7 +35,8 @@ enum Command {
     /// integrators (oliveira-implicit.md).
     /// Nunes 2006 (nunes-results.md): nunes-walk, nunes-throw, nunes-flip, or nunes; beyond the thesis:
     /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
-    /// assets/controllers/walk-robust.ron) and nunes-simbicon (the same with balance feedback).
+    /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
+    /// nunes-simbicon-faithful (SIMBICON as published, unoptimised; nunes-simbicon.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the FLEX3D experiments (the report holds the literal reading's results;
@@ -94,6 +95,10 @@ fn reproduce(
         }
         "nunes-simbicon" => {
             print!("{}", nunes::optimisers::simbicon(repo, seeds.unwrap_or(5))?);
+            return Ok(());
+        }
+        "nunes-simbicon-faithful" => {
+            print!("{}", nunes::faithful::reproduce(repo)?);
             return Ok(());
         }
         "nunes-robust" => {

@@ -360,3 +360,86 @@ fn the_shipped_character_scenes_are_the_thesis_experiments() {
     assert_eq!(outcome, thesis);
     assert!(flipped, "{outcome:?}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// SIMBICON as published (`nunes::faithful`)
+
+#[test]
+fn the_faithful_walker_holds_the_torso_with_the_stance_hip_and_swaps_legs_at_the_strike() {
+    use nunes::faithful;
+    let mut ch = faithful::character(
+        faithful::controller().unwrap(),
+        &faithful::skeleton(),
+        faithful::world_settings(),
+    )
+    .unwrap();
+    let sk = ch.env.world.skeleton(0).unwrap().clone();
+    let (hip_l, hip_r) = (sk.actuator_index("hip_l").unwrap(), sk.actuator_index("hip_r").unwrap());
+    let torso = |ch: &anima_character::Character| -> Vec<(usize, Target)> {
+        let signals = ch.env.world.commands(0).unwrap().signals();
+        signals
+            .iter()
+            .filter(|s| matches!(s.target, Target::Torso { .. }))
+            .map(|s| (s.actuator, s.target))
+            .collect()
+    };
+    // The right leg stands first: its hip holds the pelvis upright, the left hip swings.
+    ch.step().unwrap();
+    assert_eq!(torso(&ch), vec![(hip_r, Target::Torso { angle: 0.0, swing: hip_l })]);
+    let machine = ch.controller.machine_index(faithful::MACHINE).unwrap();
+    let phase = |ch: &anima_character::Character| ch.controller.machines()[machine].phase();
+    // Walk a few steps, until the left foot strikes: the legs change roles.
+    for _ in 0..40 {
+        ch.step().unwrap();
+    }
+    while phase(&ch) != Some(0) {
+        ch.step().unwrap();
+    }
+    let mut k = 0;
+    while phase(&ch) == Some(0) {
+        ch.step().unwrap();
+        k += 1;
+        assert!(k < 40, "no foot strike in 2 s");
+    }
+    assert_eq!(catalogue::foot_down(&ch.env.sensors[0], 0), 1.0, "the left foot struck");
+    // The next iteration reads this reading: the swing hip's balance feedback now reads the left
+    // (stance) ankle.
+    let (d, v) =
+        (catalogue::com_ahead_of_ankle(&ch.env.sensors[0], 0), catalogue::com_speed(&ch.env.sensors[0]));
+    ch.step().unwrap();
+    assert_eq!(torso(&ch), vec![(hip_l, Target::Torso { angle: 0.0, swing: hip_r })]);
+    let [(cd, cv), _] = faithful::gains(&ch.controller).unwrap();
+    let swing =
+        ch.env.world.commands(0).unwrap().signals().iter().find(|s| s.actuator == hip_r).copied().unwrap();
+    assert_eq!(swing.frame, TargetFrame::World);
+    let Target::Angle(a) = swing.target else { panic!("the swing hip tracks an angle") };
+    assert!((a - (0.4 + cd * d + cv * v)).abs() < 1e-12, "swing hip target {a}, d = {d}, v = {v}");
+    assert!(v.abs() > 0.05, "a case where the feedback counts: v = {v}");
+}
+
+#[test]
+fn the_faithful_walker_walks_a_minute_with_its_gains_and_falls_without_them() {
+    use nunes::faithful;
+    let shipped = faithful::controller().unwrap();
+    assert_eq!(faithful::gains(&shipped).unwrap(), [(0.0, 0.2), (2.2, 0.0)], "Table 1's walk");
+    let with = faithful::walk_as_shipped(shipped.clone(), 60.0).unwrap();
+    assert!(!with.outcome.fell && with.seconds == 60.0, "{with:?}");
+    assert!((0.5..1.5).contains(&with.speed()), "{with:?}");
+    assert!(with.strikes > 60, "a step at least every second: {with:?}");
+    let without = faithful::walk_as_shipped(faithful::without_feedback(&shipped), 60.0).unwrap();
+    assert!(without.outcome.fell && without.seconds < 5.0, "{without:?}");
+    // The walk is SIMBICON's, not the figure's alone: on the thesis's gains it falls.
+    let thesis = anima_body::BuiltinSkeleton::Humanoid.load().with_actuation(nunes::actuation()).unwrap();
+    let c = faithful::character(shipped, &thesis, faithful::world_settings()).unwrap();
+    let on_thesis = faithful::walk(c, 60.0).unwrap();
+    assert!(on_thesis.outcome.fell, "{on_thesis:?}");
+}
+
+#[test]
+fn the_simbicon_scene_is_the_faithful_walker() {
+    use anima_lab::run::body::EvaluationOutcome;
+    let EvaluationOutcome::Walk(w) = run_scene("walk-simbicon") else { panic!("a walk evaluation") };
+    let walker = nunes::faithful::walk_as_shipped(nunes::faithful::controller().unwrap(), 60.0).unwrap();
+    assert_eq!(w, walker.outcome);
+    assert!(!w.fell && w.distance > 30.0, "{w:?}");
+}

@@ -1,8 +1,10 @@
 //! The experiments of Nunes 2006 Chapter 6 on anima's bodies and controllers: worlds, evaluators and
 //! fitness functions (spec §7.4, §7.6) in this module; the thesis's optimisation runs beside its numbers
 //! ([`report`], `cargo xtask reproduce nunes`), the optimiser comparisons and the robust and SIMBICON
-//! searches beyond the thesis ([`optimisers`]), and the strobe figures ([`figures`]).
+//! searches beyond the thesis ([`optimisers`]), SIMBICON as it was published ([`faithful`]), and the
+//! strobe figures ([`figures`]).
 
+pub mod faithful;
 pub mod figures;
 pub mod optimisers;
 pub mod report;
@@ -16,7 +18,8 @@ use anima_character::{Character, CharacterError, procedures};
 /// The text of a controller shipped in `assets/controllers/` (`"walk"` for `walk.ron`): the thesis's
 /// walker (`walk`), its optimised (`walk-optimised`), push-robust (`walk-robust`), SIMBICON
 /// (`walk-simbicon`), symmetric (`walk-symmetric`, variant A) and temporal (`walk-temporal`, variant B)
-/// forms, the thrower (`throw`, `throw-optimised`) and the backflip pair (`backflip`).
+/// forms, SIMBICON as published (`walk-simbicon-faithful`), the thrower (`throw`, `throw-optimised`) and
+/// the backflip pair (`backflip`).
 pub fn controller_text(name: &str) -> anyhow::Result<String> {
     let path = crate::repo::Repo::here().assets(format!("controllers/{name}.ron"));
     std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))
@@ -203,9 +206,19 @@ pub fn walk(
     iterations: u64,
     rules: &WalkRules,
     pushes: &[Push],
+    observe: impl FnMut(&Character),
+) -> Result<WalkOutcome, CharacterError> {
+    walk_character(humanoid_character(controller)?, iterations, rules, pushes, observe)
+}
+
+/// [`walk`] for any character whose first model walks (another figure, another world).
+pub fn walk_character(
+    mut c: Character,
+    iterations: u64,
+    rules: &WalkRules,
+    pushes: &[Push],
     mut observe: impl FnMut(&Character),
 ) -> Result<WalkOutcome, CharacterError> {
-    let mut c = humanoid_character(controller)?;
     let mut tracker = WalkTracker::new(&c, rules);
     for k in 0..iterations {
         apply_pushes(&mut c, pushes, k)?;

@@ -428,7 +428,7 @@ pub fn robust(repo: &Repo) -> Result<String> {
 /// exactly as `nunes-robust` optimises the thesis's machine (same start poses, pushes, budget) with
 /// c_d and c_v as two more numbers. Both forms are searched with `seeds` CMA-ES seeds from 2006 on;
 /// seed 2006's SIMBICON winner is written to `assets/controllers/walk-simbicon.ron` (its thesis-form
-/// winner is `walk-robust.ron`).
+/// winner is `walk-robust.ron`), and the text to its section of `docs/reproduction/nunes-simbicon.md`.
 pub fn simbicon(repo: &Repo, seeds: usize) -> Result<String> {
     let walker = nunes::controller("walk")?;
     let base = nunes::simbicon::controller(&walker)?;
@@ -579,5 +579,9 @@ pub fn simbicon(repo: &Repo, seeds: usize) -> Result<String> {
     let no_gains = with(&zero);
     measure_row(&mut s, "walk-simbicon.ron with c_d = c_v = 0", &no_gains, robust_score(&no_gains, &pushes))?;
     writeln!(s)?;
+    use nunes::faithful::{REPORT, REPORT_HEADER, REPORT_SECTIONS};
+    let mut doc = crate::report::Document::new(REPORT_HEADER, &REPORT_SECTIONS);
+    doc.section("simbicon-form", s.clone());
+    repo.write_report(REPORT, &doc)?;
     Ok(s)
 }
