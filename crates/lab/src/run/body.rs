@@ -94,16 +94,40 @@ pub enum EvaluationOutcome {
 
 /// Figures a run steps: a world with its own sensor readings (body scenes), or a character whose
 /// controller senses (character scenes).
-trait Figures {
+pub(crate) trait Figures {
     fn world(&self) -> &World;
     fn sensors(&self) -> &[Sensors];
     /// One control step, the sensors read afterwards.
     fn step(&mut self) -> Result<(), BodyError>;
 }
 
-struct Posed {
+pub(crate) struct Posed {
     world: World,
     sensors: Vec<Sensors>,
+}
+
+impl Posed {
+    /// A body scene's figures, built and sensed once.
+    pub(crate) fn build(loaded: &LoadedBody) -> Result<Self> {
+        let world = loaded.scene.build(&loaded.skeletons)?;
+        let mut sensors: Vec<Sensors> =
+            (0..world.n_models()).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
+        for s in &mut sensors {
+            world.sense(s)?;
+        }
+        Ok(Self { world, sensors })
+    }
+}
+
+/// A character scene's figures with their controller, ready to step.
+pub(crate) fn build_character(loaded: &LoadedCharacter) -> Result<Character> {
+    let scene = &loaded.scene;
+    let mut world = World::new(scene.world)?;
+    for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
+        world.add_model(sk, m.placement)?;
+    }
+    let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
+    Ok(Character::new(world, loaded.controller.clone(), procedures(), &aliases)?)
 }
 
 impl Figures for Posed {
@@ -142,13 +166,7 @@ pub fn run_body(
     progress: &mut dyn Progress,
 ) -> Result<Summary> {
     let scene = &loaded.scene;
-    let world = scene.build(&loaded.skeletons)?;
-    let mut sensors: Vec<Sensors> =
-        (0..world.n_models()).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
-    for s in &mut sensors {
-        world.sense(s)?;
-    }
-    let mut figures = Posed { world, sensors };
+    let mut figures = Posed::build(loaded)?;
     let n_steps = scene.n_steps();
     run_figures(&mut figures, label, n_steps, scene.frame_interval, opts, progress, |_| false)
 }
@@ -162,12 +180,7 @@ pub fn run_character(
     progress: &mut dyn Progress,
 ) -> Result<Summary> {
     let scene = &loaded.scene;
-    let mut world = World::new(scene.world)?;
-    for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
-        world.add_model(sk, m.placement)?;
-    }
-    let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
-    let mut c = Character::new(world, loaded.controller.clone(), procedures(), &aliases)?;
+    let mut c = build_character(loaded)?;
     enum Tracker {
         None,
         Walk(nunes::WalkTracker),
