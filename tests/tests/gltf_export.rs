@@ -150,6 +150,57 @@ fn a_sheet_runs_frames_read_back_from_its_gltf() {
 }
 
 #[test]
+fn a_long_run_keeps_one_frame_in_s_and_its_last_and_a_stopped_run_what_ran() {
+    // 2,500 frames: more than the export keeps (a thousand keyframes), so one frame in 3 is kept, and
+    // the last frame, 2,500, which is no multiple of 3.
+    let dir = scratch("long");
+    let mut scene = load("scenes/standard-sheet-32.ron", 0.5);
+    let Scene::Sheet(sheet) = &mut scene else { unreachable!() };
+    sheet.frame_rate_hz = 5000.0;
+    let opts = RunOptions { export: Some(Export::Gltf), ..RunOptions::quiet() };
+    let s =
+        run(&scene, "long", &RunOptions { out_dir: Some(dir.clone()), ..opts.clone() }, &mut Silent).unwrap();
+    assert_eq!(s.frames, 2500);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("keeps one frame in 3 and the last (835 keyframes")),
+        "{:?}",
+        s.warnings
+    );
+    let glb = Glb::read(&dir.join("animation.glb"));
+    let node = glb.node("sheet");
+    let (times, _) = glb.track(&node, gltf::animation::Property::MorphTargetWeights);
+    assert_eq!(times.len(), 835);
+    assert_eq!((times[1], times[833], times[834]), (3.0 / 5000.0, 2499.0 / 5000.0, 0.5));
+    let last = obj(&dir.join("final.obj"));
+    assert_close(&glb.morph_frame(&node, 834, UpAxis::PlusZ), last.vertices(), "the last frame");
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // A run that goes non-finite stops at that frame: the frames before it are exported, or those
+    // before the first that f32 cannot hold (the positions grow past 10³⁸ m before they overflow f64).
+    let dir = scratch("diverging");
+    let mut scene = load("scenes/standard-sheet-32.ron", 1.0);
+    let Scene::Sheet(sheet) = &mut scene else { unreachable!() };
+    sheet.dt_s = 0.004;
+    let s =
+        run(&scene, "diverging", &RunOptions { out_dir: Some(dir.clone()), ..opts }, &mut Silent).unwrap();
+    assert!(!s.all_finite && s.frames < 30, "{s:?}");
+    let glb = Glb::read(&dir.join("animation.glb"));
+    let (times, _) = glb.track(&glb.node("sheet"), gltf::animation::Property::MorphTargetWeights);
+    let beyond_f32 = s.warnings.iter().find(|w| w.contains("not finite in f32"));
+    match beyond_f32 {
+        None => assert_eq!(times.len(), s.frames + 1, "frame 0 and every frame the run reached"),
+        Some(w) => {
+            let k = times.len();
+            assert!(
+                k >= 2 && w.contains(&format!("(run frame {k}); the file holds the frames before it")),
+                "{w}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn an_oliveira_drapes_frames_read_back_from_its_gltf() {
     // On a static mesh: morph targets, with the Bunny and the floor as static meshes.
     let dir = scratch("bunny");

@@ -218,7 +218,7 @@ impl GltfExport {
             Err(e) => {
                 self.truncate();
                 self.provisional = false;
-                self.stopped = Some(format!("the glTF export ends before frame {k}: {e}"));
+                self.stopped = Some(format!("{e} (run frame {k}); the file holds the frames before it"));
             }
         }
     }
