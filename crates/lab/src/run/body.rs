@@ -15,6 +15,7 @@ use anima_viz::{Image, View2d, fill_disc, fill_polygon, stroke_polygon};
 use anyhow::Result;
 use serde::Serialize;
 
+use super::export::GltfExport;
 use super::{Detail, Progress, RunOptions, Summary};
 use crate::nunes::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
@@ -300,6 +301,15 @@ fn run_figures<F: Figures>(
     if out.is_some() {
         picture(world, 0, &mut frames)?;
     }
+    // The export's frames are the pictures' frames: the start, then every `frame_every` steps.
+    let mut export = match opts.gltf_dir() {
+        Some(_) => {
+            let mut e = GltfExport::figures(world, (n_steps / frame_every) as usize)?;
+            e.figure_frame(0, world)?;
+            Some(e)
+        }
+        None => None,
+    };
     let mut all_finite = true;
     let mut error = None;
     let mut picture_seconds = 0.0;
@@ -322,6 +332,11 @@ fn run_figures<F: Figures>(
             picture(figures.world(), frames.len(), &mut frames)?;
             picture_seconds += t0.elapsed().as_secs_f64();
         }
+        if let Some(e) = &mut export
+            && k % frame_every == 0
+        {
+            e.figure_frame((k / frame_every) as usize, figures.world())?;
+        }
         if k % (n_steps / 100).max(1) == 0 {
             progress.advance(k);
         }
@@ -332,6 +347,13 @@ fn run_figures<F: Figures>(
     let wall_seconds = started.elapsed().as_secs_f64();
     progress.end();
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
+    let mut warnings = Vec::new();
+    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
+        for w in e.write(dir)? {
+            progress.warn(&w);
+            warnings.push(w);
+        }
+    }
     if let Some(dir) = out
         && let Some(last) = frames.last()
     {
@@ -347,7 +369,7 @@ fn run_figures<F: Figures>(
         wall_seconds,
         all_finite,
         error,
-        warnings: Vec::new(),
+        warnings,
         self_intersections: None,
         detail: Detail::Body(BodyDetail {
             dt: settings.dt,
