@@ -409,9 +409,10 @@ fn load(py: Python<'_>, path: PathBuf, gravity: Option<[f64; 3]>) -> PyResult<Py
 }
 
 /// Runs a scene file to its end as `anima run` does and returns its summary as JSON text (the Python
-/// wrapper `anima.run` returns it as a dict). With `out`, frames, pictures and `summary.json` go there.
+/// wrapper `anima.run` returns it as a dict). With `out`, frames, pictures and `summary.json` go there,
+/// and with `export = "gltf"` the run as an animated glTF, `animation.glb`.
 #[pyfunction]
-#[pyo3(signature = (path, out = None, integrator = None, dt = None, duration = None))]
+#[pyo3(signature = (path, out = None, integrator = None, dt = None, duration = None, export = None))]
 fn run_json(
     py: Python<'_>,
     path: PathBuf,
@@ -419,13 +420,22 @@ fn run_json(
     integrator: Option<&str>,
     dt: Option<f64>,
     duration: Option<f64>,
+    export: Option<&str>,
 ) -> PyResult<String> {
+    let export = match export {
+        None => None,
+        Some("gltf") => Some(anima_lab::run::export::Export::Gltf),
+        Some(other) => return Err(value_error(format!("expected the export `gltf`, found `{other}`"))),
+    };
+    if export.is_some() && out.is_none() {
+        return Err(value_error("export needs an `out` folder to write the animation to"));
+    }
     let mut scene = load_scene(&path, None)?;
     let overrides =
         Overrides { integrator: self::integrator(integrator)?, dt, duration, ..Overrides::default() };
     overrides.apply(&mut scene).map_err(value_error)?;
     let opts = match &out {
-        Some(dir) => RunOptions::writing_to(dir),
+        Some(dir) => RunOptions { export, ..RunOptions::writing_to(dir) },
         None => RunOptions::quiet(),
     };
     let label = path.display().to_string();

@@ -27,6 +27,16 @@ def test_run_goes_to_the_scenes_end_and_matches_anima_run(assets, tmp_path):
     assert (tmp_path / "summary.json").exists() and (tmp_path / "final.png").exists()
 
 
+def test_a_run_exports_its_animation(assets, tmp_path):
+    anima.run(assets / "scenes/stand.ron", tmp_path, duration=1.0, export="gltf")
+    glb = (tmp_path / "animation.glb").read_bytes()
+    assert glb[:4] == b"glTF" and len(glb) > 1000
+    with pytest.raises(ValueError, match="out"):
+        anima.run(assets / "scenes/stand.ron", export="gltf")
+    with pytest.raises(ValueError, match="gltf"):
+        anima.run(assets / "scenes/stand.ron", tmp_path, export="usd")
+
+
 def test_runs_are_deterministic():
     a, b = anima.Cloth.drape("sphere", 9), anima.Cloth.drape("sphere", 9)
     a.step(300)

@@ -55,10 +55,12 @@ def run(
     integrator: Optional[str] = None,
     dt: Optional[float] = None,
     duration: Optional[float] = None,
+    export: Optional[str] = None,
 ) -> dict[str, Any]:
     """Runs a scene file to its end, as ``anima run`` does, and returns its summary.
 
-    With ``out``, the frames, pictures and ``summary.json`` are written there. ``integrator``, ``dt``
+    With ``out``, the frames, pictures and ``summary.json`` are written there, and with
+    ``export="gltf"`` the whole run as an animated glTF 2.0 file, ``animation.glb``. ``integrator``, ``dt``
     and ``duration`` override the scene's, as the command's options do. A character scene's summary
     holds its evaluation (a walk's distance, a throw's landing point, a backflip's outcome).
     """
@@ -68,6 +70,7 @@ def run(
         integrator=integrator,
         dt=dt,
         duration=duration,
+        export=export,
     )
     return json.loads(text)
 

@@ -144,5 +144,6 @@ def run_json(
     integrator: Optional[str] = None,
     dt: Optional[float] = None,
     duration: Optional[float] = None,
+    export: Optional[str] = None,
 ) -> str: ...
 def walk_json(controller: PathLike, iterations: int = 1000) -> str: ...
