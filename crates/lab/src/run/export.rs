@@ -1,5 +1,5 @@
 //! The animated glTF export of a run (`RunOptions::export`): every kind of run hands its frames to a
-//! [`GltfExport`], which gathers them as `anima_viz::gltf` plain data and writes `animation.glb` into
+//! `GltfExport`, which gathers them as `anima_viz::gltf` plain data and writes `animation.glb` into
 //! the output folder when the run ends, also when it stopped early (what ran is exported).
 //!
 //! The frames are the run's own: frame 0 is the state at t = 0 (whether or not the OBJ frame 0 is
