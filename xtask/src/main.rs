@@ -2,6 +2,8 @@
 //! figure in `docs/figures/` and run the benchmarks. Every experiment is a function of `anima-lab`; this
 //! binary only parses the command and names the repository the reports are written into.
 
+mod test;
+
 use anima_cloth::flex3d::FrictionMode;
 use anima_lab::repo::Repo;
 use anima_lab::{bench, figures, flex3d, nunes, oliveira};
@@ -71,6 +73,17 @@ enum Command {
         /// Python with them (ANIMA_PEERS_PYTHON); installs nothing, and without them times anima alone.
         #[arg(long)]
         peers: bool,
+    },
+    /// Every test: the Rust workspace's, the glTF validator's and the Python package's (pytest, with a
+    /// local Ray cluster). Installs what it needs under target/ (npm's gltf-validator, a Python virtual
+    /// environment). --rust, --gltf, --python run only those parts.
+    Test {
+        #[arg(long)]
+        rust: bool,
+        #[arg(long)]
+        gltf: bool,
+        #[arg(long)]
+        python: bool,
     },
 }
 
@@ -151,5 +164,12 @@ fn main() -> Result<()> {
             anima_lab::peers::run(&repo, &target.join("release/anima"))
         }
         Command::Bench { quick, only, .. } => bench::run(&repo, quick, only.as_deref()),
+        Command::Test { rust, gltf, python } => {
+            let all = !(rust || gltf || python);
+            test::run(
+                repo.root(),
+                test::Parts { rust: rust || all, gltf: gltf || all, python: python || all },
+            )
+        }
     }
 }

@@ -10,7 +10,9 @@ use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticR
 use anima_cloth::self_collision::SelfCollisionMode;
 use anima_geom::DVec3;
 use anima_lab::optimise::{OptimiseOptions, optimise};
-use anima_lab::run::{Detail, Flex3dSwitches, Overrides, RunOptions, SolveOptions, Summary, write_summary};
+use anima_lab::run::{
+    Detail, Export, Flex3dSwitches, Overrides, RunOptions, SolveOptions, Summary, write_summary,
+};
 use anima_ode::{Integrator, LinearSolver};
 use anima_scene::{LoadOptions, LoadedFlex3d, Scene};
 use anyhow::{Context, Result};
@@ -142,6 +144,14 @@ enum SelfCollisionArg {
     Off,
 }
 
+/// An animation of the whole run, written at its end.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ExportArg {
+    /// Animated glTF 2.0 (OUT/animation.glb): cloth as morph targets (a mesh per frame when
+    /// remeshed) over the static objects, figures as node hierarchies; metres, y up.
+    Gltf,
+}
+
 /// FLEX3D's friction reading (spec S7.2).
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum FrictionArg {
@@ -242,6 +252,9 @@ struct RunArgs {
     /// Do not render pictures.
     #[arg(long)]
     no_pictures: bool,
+    /// Also write the whole run as one animation file (every scene kind).
+    #[arg(long, value_enum)]
+    export: Option<ExportArg>,
     /// No progress bar and no report on standard error.
     #[arg(long, short)]
     quiet: bool,
@@ -371,6 +384,9 @@ impl RunArgs {
                 newton_iterations: self.newton_iterations.map(|k| k as usize),
             },
             reference,
+            export: self.export.map(|e| match e {
+                ExportArg::Gltf => Export::Gltf,
+            }),
         })
     }
 }

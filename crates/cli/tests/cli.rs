@@ -214,6 +214,30 @@ fn every_scene_file_under_assets_runs_and_every_part_is_refused_as_a_scene() {
 }
 
 #[test]
+fn export_gltf_writes_the_animation_and_a_later_run_without_it_removes_it() {
+    let out = temp_dir("gltf");
+    let run = |extra: &[&str]| {
+        let o = anima()
+            .args(["run", "--duration", "1", "--no-pictures", "--out"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    run(&["--export", "gltf"]);
+    let glb = std::fs::read(out.join("animation.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    // A run that exports nothing leaves no animation of an earlier run beside its own frames.
+    let err = run(&[]);
+    assert!(!out.join("animation.glb").exists() && err.contains("of an earlier run"), "{err}");
+    let o = anima().args(["run", "--export", "fbx"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("gltf"), "the choices are listed");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
 fn closed_choices_list_their_values() {
     let o = anima().args(["run", "--friction", "sticky"]).output().unwrap();
     assert_eq!(o.status.code(), Some(2));

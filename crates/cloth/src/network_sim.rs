@@ -214,6 +214,11 @@ impl NetworkSim {
         self.step
     }
 
+    /// The step, s.
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
     pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
         &mut self.stepper
     }

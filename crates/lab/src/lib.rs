@@ -53,3 +53,4 @@ pub mod picture;
 pub mod repo;
 pub mod report;
 pub mod run;
+pub mod sim;

@@ -33,7 +33,7 @@ pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamI
 }
 
 /// The spec's optimiser over the selected parameters, started from the controller's values.
-pub fn optimiser(loaded: &LoadedOptimisation, ids: &[ParamId]) -> Result<Box<dyn Optimiser>> {
+pub fn optimiser(loaded: &LoadedOptimisation, ids: &[ParamId]) -> Result<Box<dyn Optimiser + Send>> {
     let c = &loaded.controller;
     let (space, x0, seed) = (c.space(ids), c.values_of(ids), loaded.spec.seed);
     for stage in match &loaded.spec.optimiser {

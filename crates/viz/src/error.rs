@@ -1,6 +1,6 @@
 //! The one error type of the crate.
 
-/// Everything that can go wrong while making or writing a picture.
+/// Everything that can go wrong while making or writing a picture or an animation.
 #[derive(Debug, thiserror::Error)]
 pub enum VizError {
     /// A width or height of zero, or larger than [`crate::Image::MAX_SIDE`].
@@ -30,6 +30,21 @@ pub enum VizError {
     /// The PNG encoder failed, including I/O errors of the writer it was given.
     #[error("PNG encoding failed: {0}")]
     Png(#[from] png::EncodingError),
+
+    /// What was handed to the glTF exporter cannot be written: a frame with the wrong number of
+    /// vertices, a time that does not advance, a non-finite position, a triangle naming a missing vertex.
+    #[error("glTF export: {object}: {reason}")]
+    GltfInput { object: String, reason: String },
+
+    /// The animation would not fit a GLB file, whose length is a 32-bit number.
+    #[error(
+        "glTF export: the file would be {bytes} bytes, more than a GLB file can hold (4 GiB); keep fewer frames"
+    )]
+    GltfTooLarge { bytes: u64 },
+
+    /// Writing the GLB file failed.
+    #[error("glTF export: writing failed: {0}")]
+    GltfWrite(#[source] std::io::Error),
 }
 
 /// Converts a plotters error into [`VizError::Draw`]; plotters' error types borrow the backend's error

@@ -1,5 +1,6 @@
 //! Pictures for anima: a small flat-shading software rasteriser for triangle meshes, line plots of
-//! series, and an RGB [`Image`] that can be labelled, tiled into figure sheets and written as PNG.
+//! series, an RGB [`Image`] that can be labelled, tiled into figure sheets and written as PNG, and the
+//! animated glTF exporter.
 //!
 //! This crate knows no physics: it draws vertices, triangles and (x, y) points handed to it, whatever
 //! they came from. It does no file I/O of its own: writers take `impl Write`. Everything is drawn in
@@ -10,6 +11,7 @@
 //!   (cloth has no inside), optional edge lines, and a sky-and-ground background.
 //! - [`LinePlot`] draws [`Series`] with plotters: legend, linear or log axes, clipping to given ranges.
 //! - [`Image::grid`] tiles frames into a sheet; [`Image::label`] writes text on a picture.
+//! - [`gltf`] writes an animated glTF 2.0 file (`.glb`) of moving meshes and articulated figures.
 //!
 //! ```
 //! use anima_geom::{DVec3, box_mesh};
@@ -31,6 +33,7 @@
 mod camera;
 mod draw2d;
 mod error;
+pub mod gltf;
 mod image;
 mod plot;
 mod raster;

@@ -60,13 +60,20 @@ impl TriangleGrid {
         let size = bounds.size();
         let mut cell = extent.max(size.max_element() * 1e-6).max(f64::MIN_POSITIVE);
         let max_cells = (4 * boxes.len()).max(64) as f64;
-        loop {
-            let d = (size / cell).floor() + DVec3::ONE;
-            if d.x * d.y * d.z <= max_cells {
-                self.dims = [d.x as usize, d.y as usize, d.z as usize];
-                break;
+        if !size.is_finite() {
+            // A box with a non-finite corner, from a state the step is about to report as non-finite:
+            // one cell holds every triangle (every index maps to it), so that the pass still ends.
+            self.dims = [1, 1, 1];
+            cell = f64::INFINITY;
+        } else {
+            loop {
+                let d = (size / cell).floor() + DVec3::ONE;
+                if d.x * d.y * d.z <= max_cells {
+                    self.dims = [d.x as usize, d.y as usize, d.z as usize];
+                    break;
+                }
+                cell *= 1.5;
             }
-            cell *= 1.5;
         }
         self.origin = bounds.min;
         self.inv_cell = 1.0 / cell;
@@ -158,5 +165,47 @@ impl TriangleGrid {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box(at: f64) -> Aabb {
+        Aabb { min: DVec3::splat(at), max: DVec3::splat(at + 1.0) }
+    }
+
+    #[test]
+    fn a_non_finite_box_gives_one_cell_that_holds_everything() {
+        // A state gone non-finite reaches the collision pass before the step reports it: the rebuild
+        // must end (it once looked for a cell size forever) and still find every triangle.
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for binning in [Binning::Spanning, Binning::MinCorner] {
+                let broken = if bad < 0.0 {
+                    Aabb { min: DVec3::new(0.0, bad, 0.0), max: DVec3::ONE }
+                } else {
+                    Aabb { min: DVec3::ZERO, max: DVec3::new(1.0, bad, 1.0) }
+                };
+                let boxes = [unit_box(0.0), broken, unit_box(5.0)];
+                let mut grid = TriangleGrid::default();
+                grid.rebuild(&boxes, binning);
+                let mut found = Vec::new();
+                grid.query(&unit_box(0.5), |t| found.push(t));
+                found.sort_unstable();
+                if bad.is_nan() {
+                    // A NaN corner drops out of the bounds (min and max ignore it): an ordinary grid.
+                    assert!(found.contains(&0), "{binning:?}");
+                } else {
+                    assert_eq!(grid.dims, [1, 1, 1]);
+                    assert_eq!(found, vec![0, 1, 2], "{bad} {binning:?}");
+                }
+            }
+        }
+        // Finite boxes still get a grid of several cells.
+        let boxes: Vec<Aabb> = (0..100).map(|i| unit_box(i as f64)).collect();
+        let mut grid = TriangleGrid::default();
+        grid.rebuild(&boxes, Binning::Spanning);
+        assert!(grid.dims.iter().product::<usize>() > 1);
     }
 }

@@ -609,6 +609,21 @@ impl Flex3dWorld {
         &self.now.v
     }
 
+    /// Replaces every particle's position and velocity (surface after surface, as [`Self::positions`]
+    /// lists them), for a caller that drives the surfaces itself. The integrator's history starts again
+    /// and the collision pass rebuilds its grid and clearances at the next step. Pinned particles take
+    /// the given positions too; their prescribed motion goes on from there.
+    ///
+    /// # Panics
+    /// If `x` or `v` does not hold one value per particle.
+    pub fn set_state(&mut self, x: &[DVec3], v: &[DVec3]) {
+        assert!(x.len() == self.now.x.len() && v.len() == x.len(), "one position and velocity per particle");
+        self.now.x.copy_from_slice(x);
+        self.now.v.copy_from_slice(v);
+        self.stepper.reset_history();
+        self.colliders.surface_bins.anchor.clear();
+    }
+
     pub fn surface_positions(&self, surface: usize) -> &[DVec3] {
         &self.now.x[self.surfaces[surface].range()]
     }

@@ -243,6 +243,15 @@ impl AdaptiveCloth {
         &self.cloth
     }
 
+    /// Replaces the cloth's positions and velocities ([`OliveiraCloth::set_state`]); the remesher
+    /// sees them at its next pass.
+    ///
+    /// # Panics
+    /// If `x` or `v` does not hold one value per particle of the current mesh.
+    pub fn set_state(&mut self, x: &[DVec3], v: &[DVec3]) {
+        self.cloth.set_state(x, v);
+    }
+
     /// The cloth, e.g. to set its state in a test through a rebuild.
     #[cfg(test)]
     pub(crate) fn cloth_mut(&mut self) -> &mut OliveiraCloth {

@@ -15,6 +15,7 @@ use anima_viz::{Image, View2d, fill_disc, fill_polygon, stroke_polygon};
 use anyhow::Result;
 use serde::Serialize;
 
+use super::export::GltfExport;
 use super::{Detail, Progress, RunOptions, Summary};
 use crate::nunes::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
@@ -94,16 +95,40 @@ pub enum EvaluationOutcome {
 
 /// Figures a run steps: a world with its own sensor readings (body scenes), or a character whose
 /// controller senses (character scenes).
-trait Figures {
+pub(crate) trait Figures {
     fn world(&self) -> &World;
     fn sensors(&self) -> &[Sensors];
     /// One control step, the sensors read afterwards.
     fn step(&mut self) -> Result<(), BodyError>;
 }
 
-struct Posed {
+pub(crate) struct Posed {
     world: World,
     sensors: Vec<Sensors>,
+}
+
+impl Posed {
+    /// A body scene's figures, built and sensed once.
+    pub(crate) fn build(loaded: &LoadedBody) -> Result<Self> {
+        let world = loaded.scene.build(&loaded.skeletons)?;
+        let mut sensors: Vec<Sensors> =
+            (0..world.n_models()).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
+        for s in &mut sensors {
+            world.sense(s)?;
+        }
+        Ok(Self { world, sensors })
+    }
+}
+
+/// A character scene's figures with their controller, ready to step.
+pub(crate) fn build_character(loaded: &LoadedCharacter) -> Result<Character> {
+    let scene = &loaded.scene;
+    let mut world = World::new(scene.world)?;
+    for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
+        world.add_model(sk, m.placement)?;
+    }
+    let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
+    Ok(Character::new(world, loaded.controller.clone(), procedures(), &aliases)?)
 }
 
 impl Figures for Posed {
@@ -142,13 +167,7 @@ pub fn run_body(
     progress: &mut dyn Progress,
 ) -> Result<Summary> {
     let scene = &loaded.scene;
-    let world = scene.build(&loaded.skeletons)?;
-    let mut sensors: Vec<Sensors> =
-        (0..world.n_models()).map(|m| Sensors::new(&world, m)).collect::<Result<_, _>>()?;
-    for s in &mut sensors {
-        world.sense(s)?;
-    }
-    let mut figures = Posed { world, sensors };
+    let mut figures = Posed::build(loaded)?;
     let n_steps = scene.n_steps();
     run_figures(&mut figures, label, n_steps, scene.frame_interval, opts, progress, |_| false)
 }
@@ -162,12 +181,7 @@ pub fn run_character(
     progress: &mut dyn Progress,
 ) -> Result<Summary> {
     let scene = &loaded.scene;
-    let mut world = World::new(scene.world)?;
-    for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
-        world.add_model(sk, m.placement)?;
-    }
-    let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
-    let mut c = Character::new(world, loaded.controller.clone(), procedures(), &aliases)?;
+    let mut c = build_character(loaded)?;
     enum Tracker {
         None,
         Walk(nunes::WalkTracker),
@@ -287,6 +301,15 @@ fn run_figures<F: Figures>(
     if out.is_some() {
         picture(world, 0, &mut frames)?;
     }
+    // The export's frames are the pictures' frames: the start, then every `frame_every` steps.
+    let mut export = match opts.gltf_dir() {
+        Some(_) => {
+            let mut e = GltfExport::figures(world, (n_steps / frame_every) as usize)?;
+            e.figure_frame(0, world)?;
+            Some(e)
+        }
+        None => None,
+    };
     let mut all_finite = true;
     let mut error = None;
     let mut picture_seconds = 0.0;
@@ -309,6 +332,11 @@ fn run_figures<F: Figures>(
             picture(figures.world(), frames.len(), &mut frames)?;
             picture_seconds += t0.elapsed().as_secs_f64();
         }
+        if let Some(e) = &mut export
+            && k % frame_every == 0
+        {
+            e.figure_frame((k / frame_every) as usize, figures.world())?;
+        }
         if k % (n_steps / 100).max(1) == 0 {
             progress.advance(k);
         }
@@ -319,6 +347,13 @@ fn run_figures<F: Figures>(
     let wall_seconds = started.elapsed().as_secs_f64();
     progress.end();
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
+    let mut warnings = Vec::new();
+    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
+        for w in e.write(dir)? {
+            progress.warn(&w);
+            warnings.push(w);
+        }
+    }
     if let Some(dir) = out
         && let Some(last) = frames.last()
     {
@@ -334,7 +369,7 @@ fn run_figures<F: Figures>(
         wall_seconds,
         all_finite,
         error,
-        warnings: Vec::new(),
+        warnings,
         self_intersections: None,
         detail: Detail::Body(BodyDetail {
             dt: settings.dt,

@@ -6,9 +6,11 @@ use anima_cloth::flex3d::{Flex3dWorld, NonFiniteError, StepError};
 use anima_geom::obt::{ObtObject, write_obt};
 use anima_geom::{DVec3, obj::write_obj};
 use anima_scene::LoadedFlex3d;
+use anima_viz::gltf::UpAxis;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
+use super::export::GltfExport;
 use super::{
     CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
     stability_warning,
@@ -112,6 +114,21 @@ pub fn run(
     if opts.frame0 {
         write_frame(opts, &world, 0)?;
     }
+    // FLEX3D scenes have y up, as glTF does; the export starts from the state at t = 0.
+    let mut export = match opts.gltf_dir() {
+        Some(_) => {
+            let surfaces: Vec<(&str, usize, &[[u32; 3]])> = world
+                .surfaces()
+                .iter()
+                .enumerate()
+                .map(|(s, info)| (info.name.as_str(), world.surface_positions(s).len(), &info.triangles[..]))
+                .collect();
+            let mut e = GltfExport::cloth(UpAxis::PlusY, &loaded.objects, &surfaces, n_frames + extra)?;
+            e.deforming_frame(0, world.time(), |s| world.surface_positions(s));
+            Some(e)
+        }
+        None => None,
+    };
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut failure = None;
@@ -126,6 +143,9 @@ pub fn run(
             break;
         }
         write_frame(opts, &world, k)?;
+        if let Some(e) = &mut export {
+            e.deforming_frame(k, world.time(), |s| world.surface_positions(s));
+        }
         watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
         frame_stats.push(FrameStats {
@@ -147,6 +167,12 @@ pub fn run(
     let d = world.diagnostics();
     let counts = world.collision_counts();
     let steps = world.steps_taken();
+    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
+        for w in e.write(dir)? {
+            progress.warn(&w);
+            warnings.push(w);
+        }
+    }
     let summary = Summary {
         scene: label.to_owned(),
         kind: "flex3d",

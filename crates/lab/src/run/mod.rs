@@ -3,6 +3,7 @@
 //! the tests drive scenes through the same code, so what they check is what a user runs.
 
 pub mod body;
+pub mod export;
 pub mod flex3d;
 pub mod oliveira;
 pub mod sheet;
@@ -18,6 +19,8 @@ use anima_ode::{Integrator, LinearSolver};
 use anima_scene::Scene;
 use anyhow::Result;
 use serde::Serialize;
+
+pub use export::Export;
 
 use crate::output::write_atomic;
 
@@ -38,6 +41,8 @@ pub struct RunOptions {
     /// Sheet scenes: reference positions (another run's `final.obj`); the summary then reports the RMS
     /// distance to them.
     pub reference: Option<Vec<DVec3>>,
+    /// An animation of the whole run to write at its end (`animation.glb` for glTF), beside the frames.
+    pub export: Option<Export>,
 }
 
 impl RunOptions {
@@ -59,6 +64,11 @@ impl RunOptions {
     /// The folder pictures go to, when pictures are drawn.
     fn picture_dir(&self) -> Option<&Path> {
         self.out_dir.as_deref().filter(|_| self.pictures)
+    }
+
+    /// The folder `animation.glb` goes to, when the run is exported as glTF.
+    fn gltf_dir(&self) -> Option<&Path> {
+        self.out_dir.as_deref().filter(|_| self.export == Some(Export::Gltf))
     }
 }
 
@@ -201,7 +211,8 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
 
 /// Runs a loaded scene of any kind; `label` names it in the summary. The output folder is checked
 /// writable first, and the frames an earlier run of the same kind left there are removed (with a
-/// warning), so the folder holds this run's frames only.
+/// warning), so the folder holds this run's frames only; so is an earlier `animation.glb`, whatever
+/// its kind, since it shows an earlier run (this run writes its own at its end when it exports).
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
     if let Some(dir) = &opts.out_dir {
         crate::output::check_writable(dir)?;
@@ -211,12 +222,13 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
         };
         let ours = |name: &str| {
             use crate::output::is_frame_file as frame;
-            match scene {
+            let frame_file = match scene {
                 Scene::Flex3d(_) => surfaces.iter().any(|p| frame(name, p, ".OBT") || frame(name, p, ".obj")),
                 Scene::Sheet(_) => frame(name, "sheet_", ".obj"),
                 Scene::Oliveira(_) => frame(name, "cloth_", ".obj"),
                 Scene::Body(_) | Scene::Character(_) => frame(name, "frame_", ".png"),
-            }
+            };
+            frame_file || name == export::GLTF_FILE
         };
         let removed = crate::output::remove_stale(dir, ours)?;
         if removed > 0 {

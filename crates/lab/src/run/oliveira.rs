@@ -11,10 +11,12 @@ use anima_cloth::oliveira::AdaptiveCloth;
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3};
 use anima_scene::oliveira::LoadedOliveira;
+use anima_viz::gltf::UpAxis;
 use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
+use super::export::GltfExport;
 use super::{CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames};
 use crate::oliveira::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
@@ -72,6 +74,10 @@ pub fn run(
     if opts.frame0 {
         write_frame(opts, &cloth, 0)?;
     }
+    let mut export = match opts.gltf_dir() {
+        Some(_) => Some(gltf_export(loaded, &cloth, n_frames)?),
+        None => None,
+    };
     let (mut min_dt, mut max_dt) = (f64::INFINITY, 0.0f64);
     let mut next_frame = 1;
     let mut kept: Vec<Kept> = Vec::new();
@@ -94,6 +100,11 @@ pub fn run(
                 write_error = Some(e);
                 return ControlFlow::Break(());
             }
+            if let Some(e) = &mut export {
+                // The frame's own time: the state is that of the first step to reach it, as in the
+                // OBJ frames (a long step may reach two frame times at once).
+                export_frame(e, c, next_frame, frame_time(next_frame));
+            }
             watch.look(c.cloth().positions(), c.cloth().triangles());
             if opts.picture_dir().is_some() && shown.contains(&next_frame) {
                 kept.push((t, c.cloth().positions().to_vec(), c.cloth().triangles().to_vec()));
@@ -107,6 +118,13 @@ pub fn run(
     progress.end();
     if let Some(e) = write_error {
         return Err(e);
+    }
+    let mut warnings = Vec::new();
+    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
+        for w in e.write(dir)? {
+            progress.warn(&w);
+            warnings.push(w);
+        }
     }
     let c = cloth.cloth();
     watch.look(c.positions(), c.triangles());
@@ -127,7 +145,7 @@ pub fn run(
             )),
             _ => None,
         },
-        warnings: Vec::new(),
+        warnings,
         self_intersections: Some(watch.largest),
         detail: Detail::Oliveira(OliveiraDetail {
             integrator: loaded.scene.integrator.name().to_owned(),
@@ -156,6 +174,28 @@ pub fn run(
         write_pictures(dir, &cloth, &kept)?;
     }
     Ok(summary)
+}
+
+/// The export of a drape, with frame 0 in it: the cloth over its objects, as morph targets when no
+/// remesher changes its mesh and as a mesh per frame when one does. Up is against the scene's gravity
+/// (z in the shipped scenes).
+fn gltf_export(loaded: &LoadedOliveira, cloth: &AdaptiveCloth, n_frames: usize) -> Result<GltfExport> {
+    let c = cloth.cloth();
+    let up = UpAxis::against(loaded.scene.gravity_m_s2, UpAxis::PlusZ);
+    let objects: Vec<_> =
+        c.colliders().iter().zip(object_meshes(c)).map(|(o, (mesh, _))| (o.name.clone(), mesh)).collect();
+    let mut e = if loaded.remesher.is_none() {
+        GltfExport::cloth(up, &objects, &[("cloth", c.positions().len(), c.triangles())], n_frames)?
+    } else {
+        GltfExport::remeshed(up, &objects, n_frames, c.positions().len())
+    };
+    export_frame(&mut e, cloth, 0, 0.0);
+    Ok(e)
+}
+
+fn export_frame(e: &mut GltfExport, cloth: &AdaptiveCloth, k: usize, time_s: f64) {
+    let c = cloth.cloth();
+    e.cloth_frame(k, time_s, c.positions(), c.triangles());
 }
 
 /// Writes `cloth_<frame>.obj`: the positions and triangles of the cloth as they are now.

@@ -9,10 +9,12 @@ use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3, grid_triangles};
 use anima_ode::{State, StepControl, Stepper, integrate};
 use anima_scene::sheet::SheetScene;
+use anima_viz::gltf::UpAxis;
 use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Result, bail};
 use serde::Serialize;
 
+use super::export::GltfExport;
 use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 
@@ -73,6 +75,16 @@ pub fn run(
     let n_frames = ((scene.duration_s * scene.frame_rate_hz).round() as usize).max(1);
     let mut snapshots: Vec<(usize, f64, Vec<DVec3>)> = Vec::new();
     let shown = sheet_frames(n_frames);
+    // The sheet's up is against its gravity (z up in the standard sheets).
+    let mut export = match opts.gltf_dir() {
+        Some(_) => {
+            let up = UpAxis::against(scene.sheet.gravity, UpAxis::PlusZ);
+            let mut e = GltfExport::cloth(up, &[], &[("sheet", n, &triangles)], n_frames)?;
+            e.deforming_frame(0, sim.time(), |_| &sim.state.x[..]);
+            Some(e)
+        }
+        None => None,
+    };
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
@@ -101,6 +113,12 @@ pub fn run(
         }
         sim.state = state;
         frames = n_frames;
+        // The embedded controller gives no frames on the way: the export holds the start and the end.
+        if let Some(e) = &mut export
+            && error.is_none()
+        {
+            e.deforming_frame(n_frames, scene.duration_s, |_| &sim.state.x[..]);
+        }
     } else {
         for k in 1..=n_frames {
             let target = if k == n_frames {
@@ -114,6 +132,9 @@ pub fn run(
                 break;
             }
             frames = k;
+            if let Some(e) = &mut export {
+                e.deforming_frame(k, sim.time(), |_| &sim.state.x[..]);
+            }
             watch.look(&sim.state.x, &triangles);
             progress.advance(sim.steps_taken() as u64);
             if let Some(dir) = opts.frame_dir() {
@@ -131,6 +152,12 @@ pub fn run(
     let x = &sim.state.x;
     watch.look(x, &triangles);
     let steps = sim.steps_taken();
+    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
+        for w in e.write(dir)? {
+            progress.warn(&w);
+            warnings.push(w);
+        }
+    }
     let summary = Summary {
         scene: label.to_owned(),
         kind: "sheet",
