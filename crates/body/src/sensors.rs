@@ -333,6 +333,13 @@ pub mod catalogue {
         s.facing * s.com_velocity[0]
     }
 
+    /// The trunk's rotation rate, anima's: the abdomen's angular velocity (the pelvis's without an
+    /// abdomen), rad/s, positive backwards (counter-clockwise for a model facing +x). Continuous, not
+    /// a switch; in the backflip's flight it measures how fast the somersault turns.
+    pub fn trunk_rate(s: &Sensors) -> f64 {
+        s.layout.abdomen.or(s.layout.pelvis).map_or(0.0, |b| s.facing * s.body_angular_velocity[b])
+    }
+
     /// S-FOOTUP(f): 1 if foot `side` (0 left, 1 right) has no ground contact.
     pub fn foot_up(s: &Sensors, side: usize) -> f64 {
         on(s.layout.feet[side].is_some_and(|f| !s.on_ground[f]))

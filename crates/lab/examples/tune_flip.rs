@@ -92,9 +92,40 @@ const STAND_GENES: &[Gene] = &[
     g(&["B-PUSHER/E4/pusher/ankle_l/k1", "B-PUSHER/E4/pusher/ankle_r/k1"], -3.0, 3.0),
 ];
 
+/// `TUNE_GENES=flight`: the somersault's tuck (E6) and brake (E7) with their feedback gains on the
+/// trunk's rotation rate (`trunk_rate`), the launch that decides the rotation (the pusher's push E3,
+/// the acrobat's push-off E5 and foot placement E2/E3), and the landing's E8 — for a flip that lands
+/// standing over the range of spacings (`TUNE_SPACINGS`). It needs a controller whose E6 and E7 use
+/// such `Feedback` targets: `FLIP_RON=crates/lab/examples/backflip-spacing-wip.ron`.
+const FLIGHT_GENES: &[Gene] = &[
+    g(&["B-ACRO-BODY/E6/acrobat/waist"], -0.2, 1.2),
+    g(&["B-ACRO-BODY/E6/acrobat/waist/k0"], -0.15, 0.15),
+    g(&["B-ACRO-BODY/E6/acrobat/hip_l", "B-ACRO-BODY/E6/acrobat/hip_r"], -0.6, 1.6),
+    g(&["B-ACRO-BODY/E6/acrobat/hip_l/k0", "B-ACRO-BODY/E6/acrobat/hip_r/k0"], -0.15, 0.15),
+    g(&["B-ACRO-BODY/E6/acrobat/knee_l", "B-ACRO-BODY/E6/acrobat/knee_r"], -2.0, 0.0),
+    g(&["B-ACRO-BODY/E6/acrobat/knee_l/k0", "B-ACRO-BODY/E6/acrobat/knee_r/k0"], -0.15, 0.15),
+    g(&["B-ACRO-BODY/E7/acrobat/waist"], -0.6, 0.8),
+    g(&["B-ACRO-BODY/E7/acrobat/waist/k0"], -0.15, 0.15),
+    g(&["B-ACRO-BODY/E7/acrobat/hip_l"], -0.4, 1.6),
+    g(&["B-ACRO-BODY/E7/acrobat/hip_r"], -0.4, 1.6),
+    g(&["B-ACRO-BODY/E7/acrobat/hip_l/k0", "B-ACRO-BODY/E7/acrobat/hip_r/k0"], -0.15, 0.15),
+    g(&["B-ACRO-BODY/E7/acrobat/knee_l", "B-ACRO-BODY/E7/acrobat/knee_r"], -1.6, 0.0),
+    g(&["B-ACRO-BODY/E7/acrobat/knee_l/k0", "B-ACRO-BODY/E7/acrobat/knee_r/k0"], -0.15, 0.15),
+    g(&["B-ACRO-ARMS/E2/acrobat/shoulder_l", "B-ACRO-ARMS/E2/acrobat/shoulder_r"], 0.0, 2.4),
+    g(&["B-ACRO-BODY/E2/acrobat/hip_l"], 0.6, 1.8),
+    g(&["B-ACRO-BODY/E2/acrobat/knee_l"], -2.0, -0.4),
+    g(&["B-ACRO-BODY/E5/acrobat/waist"], -0.6, 0.4),
+    g(&["B-ACRO-BODY/E5/acrobat/ankle_r"], -0.8, 0.3),
+    g(&["B-PUSHER/E3/pusher/shoulder_l", "B-PUSHER/E3/pusher/shoulder_r"], 1.0, 3.0),
+    g(&["B-ACRO-BODY/E8/acrobat/waist"], -0.8, 0.4),
+    g(&["B-ACRO-BODY/E8/acrobat/hip_l", "B-ACRO-BODY/E8/acrobat/hip_r"], -0.6, 1.2),
+    g(&["B-ACRO-BODY/E8/acrobat/knee_l", "B-ACRO-BODY/E8/acrobat/knee_r"], -1.0, 0.0),
+];
+
 fn genes() -> &'static [Gene] {
     match std::env::var("TUNE_GENES").as_deref() {
         Ok("stand") => STAND_GENES,
+        Ok("flight") => FLIGHT_GENES,
         _ => GENES,
     }
 }

@@ -36,6 +36,7 @@ const CATALOGUE: &[&str] = &[
     "com_speed",
     "com_ahead_of_ankle",
     "foot_down",
+    "trunk_rate",
 ];
 
 #[test]

@@ -559,6 +559,9 @@ pub fn throw(
 
 pub const FLIP_SPACING: f64 = 0.9;
 
+/// The spacings of the pair at which the backflip must land standing (issue #18): 0.86 to 0.94 m.
+pub const FLIP_SPACINGS: [f64; 5] = [0.86, 0.88, 0.9, 0.92, 0.94];
+
 /// The backflip pair (spec §3.5.2): the acrobat facing +x at x = 0 and the pusher facing −x
 /// `spacing` m in front of it, driven by one controller with model aliases `acrobat` and `pusher`.
 pub fn backflip_character(controller: Controller, spacing: f64) -> Result<Character, CharacterError> {

@@ -415,5 +415,33 @@ fn flip() -> Result<String> {
         "\nFlip complete (≥ 2π − 0.5 rad, landed, standing): {}.",
         if o.flipped() { "yes" } else { "no" }
     );
+    // Issue #18: the same controller over a range of spacings of the pair (beyond the thesis, which
+    // reports one flip).
+    let _ = writeln!(
+        s,
+        "\nThe same controller with the pusher placed at each spacing from {:.2} to {:.2} m (issue #18, \
+         beyond the thesis, which reports one flip):\n",
+        nunes::FLIP_SPACINGS[0],
+        nunes::FLIP_SPACINGS[nunes::FLIP_SPACINGS.len() - 1]
+    );
+    s.push_str(
+        "| spacing (m) | S-FOOTONHANDS (k₀) | rotation, max / end (rad) | lands (iteration) | stands at the end | pusher stays up | flip complete |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    for d in nunes::FLIP_SPACINGS {
+        let o = nunes::backflip(nunes::controller("backflip")?, d, FLIP_ITERATIONS, |_| ())?;
+        let _ = writeln!(
+            s,
+            "| {d:.2} | {} | {:.2} / {:.2} | {} | {} | {} | {} |",
+            it(o.foot_on_hands_at),
+            o.max_rotation,
+            o.final_rotation,
+            it(o.landed_at),
+            yes(o.standing),
+            yes(!o.pusher_fell),
+            yes(o.flipped())
+        );
+    }
     Ok(s)
 }
