@@ -77,6 +77,26 @@ fn as_points<'a>(a: &'a PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<&'a [
     Ok(bytemuck::cast_slice(flat))
 }
 
+/// Copies `values` into the caller's C-contiguous `(n, 3)` float64 array `out`.
+fn fill(mut out: PyReadwriteArray2<'_, f64>, values: &[DVec3]) -> PyResult<()> {
+    let values: &[f64] = bytemuck::cast_slice(values);
+    let c_order = out.is_c_contiguous();
+    let slice = out
+        .as_slice_mut()
+        .ok()
+        .filter(|_| c_order)
+        .ok_or_else(|| value_error("out: expected a C-contiguous array"))?;
+    if slice.len() != values.len() {
+        return Err(value_error(format!(
+            "out: expected shape ({}, 3), found {} values",
+            values.len() / 3,
+            slice.len()
+        )));
+    }
+    slice.copy_from_slice(values);
+    Ok(())
+}
+
 fn triangles_array<'py>(py: Python<'py>, t: &[[u32; 3]]) -> PyResult<Bound<'py, PyArray2<u32>>> {
     let flat: &[u32] = bytemuck::cast_slice(t);
     PyArray1::from_slice(py, flat).reshape([t.len(), 3])
@@ -249,43 +269,13 @@ impl Cloth {
     }
 
     /// Writes the positions into `out`, a C-contiguous `(n, 3)` float64 array, allocating nothing.
-    fn read_positions(&self, mut out: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
-        let x: &[f64] = bytemuck::cast_slice(self.sim.positions());
-        let c_order = out.is_c_contiguous();
-        let slice = out
-            .as_slice_mut()
-            .ok()
-            .filter(|_| c_order)
-            .ok_or_else(|| value_error("out: expected a C-contiguous array"))?;
-        if slice.len() != x.len() {
-            return Err(value_error(format!(
-                "out: expected shape ({}, 3), found {} values",
-                x.len() / 3,
-                slice.len()
-            )));
-        }
-        slice.copy_from_slice(x);
-        Ok(())
+    fn read_positions(&self, out: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
+        fill(out, self.sim.positions())
     }
 
     /// Writes the velocities into `out`, as `read_positions` does.
-    fn read_velocities(&self, mut out: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
-        let v: &[f64] = bytemuck::cast_slice(self.sim.velocities());
-        let c_order = out.is_c_contiguous();
-        let slice = out
-            .as_slice_mut()
-            .ok()
-            .filter(|_| c_order)
-            .ok_or_else(|| value_error("out: expected a C-contiguous array"))?;
-        if slice.len() != v.len() {
-            return Err(value_error(format!(
-                "out: expected shape ({}, 3), found {} values",
-                v.len() / 3,
-                slice.len()
-            )));
-        }
-        slice.copy_from_slice(v);
-        Ok(())
+    fn read_velocities(&self, out: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
+        fill(out, self.sim.velocities())
     }
 
     /// Replaces the state: `positions` and (when given, else the current ones kept) `velocities`, each
