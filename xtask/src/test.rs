@@ -43,7 +43,9 @@ pub fn run(root: &Path, parts: Parts) -> Result<()> {
         }
         checked(
             Command::new(&cargo)
-                .args(["test", "--release", "-p", "anima-tests", "gltf", "--", "--ignored"])
+                // The workspace's own build (what the first part compiled), not `-p anima-tests`, whose
+                // narrower feature set would compile the dependency tree a second time.
+                .args(["test", "--workspace", "--release", "gltf", "--", "--ignored"])
                 .env("ANIMA_GLTF_VALIDATOR", &tools)
                 .current_dir(root),
         )?;
