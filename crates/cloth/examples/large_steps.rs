@@ -737,6 +737,44 @@ fn drapes_section() -> Result<(), Error> {
     Ok(())
 }
 
+/// One generalised-α drape with contact in the solve, set from the environment (`DRAPE` = bunny |
+/// table | sphere, `DT`, `NEWTON`, `RHO`): its error at each snapshot time against both references.
+fn drape_probe_section() -> Result<(), Error> {
+    let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
+    let slug = std::env::var("DRAPE").unwrap_or_else(|_| "sphere".into());
+    let d = DRAPES.iter().find(|d| d.slug == slug).ok_or_else(|| format!("no drape `{slug}`"))?;
+    let faithful_ref = drape_reference(d, &faithful(), "rk4-beta-1e-3")?;
+    let converged_ref = drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?;
+    let (scene, meshes) = load_drape(d)?;
+    let mut m = DrapeMethod::fixed(
+        Integrator::GeneralizedAlpha,
+        env("DT").unwrap_or(1.0 / 60.0),
+        ContactMode::InSolve,
+    );
+    m.method.newton = env("NEWTON").map(|k| k as usize);
+    m.method.rho_inf = env("RHO");
+    let out = run_drape(&scene, &meshes, &m, &d.snapshots, true)?;
+    let per = |r: &[Vec<DVec3>]| {
+        out.snapshots
+            .iter()
+            .zip(r)
+            .map(|(a, b)| format!("{:.1}", rms_at_material_points(a, b) * 1e3))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    println!(
+        "{} {}: wall {:.3} s, inside {}; RMS (mm) at {:?} s vs thesis [{}], vs converged [{}]",
+        d.slug,
+        m.label(),
+        out.wall_s,
+        out.most_inside,
+        d.snapshots,
+        per(&faithful_ref),
+        per(&converged_ref)
+    );
+    Ok(())
+}
+
 fn main() -> Result<(), Error> {
     let what = std::env::args().nth(1).unwrap_or_else(|| "all".into());
     let all = what == "all";
@@ -751,6 +789,9 @@ fn main() -> Result<(), Error> {
     }
     if what == "probe" {
         probe_section()?;
+    }
+    if what == "drape-probe" {
+        drape_probe_section()?;
     }
     if all || what == "drapes" {
         drapes_section()?;

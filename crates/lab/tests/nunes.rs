@@ -96,6 +96,22 @@ fn the_optimised_walker_walks_without_falling() {
 }
 
 #[test]
+fn the_faithful_configuration_falls_before_the_search_and_walks_after_it() {
+    // Table 6.3's before-and-after on the humanoid with gains × 27 (`nunes-results.md`): the
+    // unoptimised walker falls within the 50 s evaluation, the thesis's search's winner walks it.
+    let rules = WalkRules::default();
+    let run = |name: &str| {
+        let c = nunes::controller(name).unwrap();
+        nunes::walk_character(nunes::faithful_character(c).unwrap(), 1000, &rules, &[], |_| ()).unwrap()
+    };
+    let before = run("walk");
+    assert!(before.fell && before.fitness() == 0.0, "{before:?}");
+    let after = run(anima_lab::nunes::report::FAITHFUL_OPTIMISED);
+    assert!(!after.fell && !after.stopped && after.iterations == 1000, "{after:?}");
+    assert!(after.fitness() > 10.0, "{after:?}");
+}
+
+#[test]
 fn the_thrower_releases_the_ball_when_t2_fires() {
     // T1: 80 iterations in E1 (0–79); T2: τ2 = 20 iterations in E2 (80–99), the release fires on its
     // switch at the end of iteration 99 (spec §6.7, §8.3.1).

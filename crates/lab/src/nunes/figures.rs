@@ -75,28 +75,59 @@ fn stack(panels: &[Image]) -> Result<Image> {
 }
 
 /// Fig. 6.7: the first `SECONDS` of the walker with the spec's proposed poses (it falls, as the
-/// thesis's did before optimisation), with our re-authored poses, and after the thesis's optimisation.
+/// thesis's did before optimisation), with our re-authored poses, and after the thesis's optimisation;
+/// then the same before and after on the humanoid with gains × 27, where the unoptimised walker falls
+/// (after half a minute: those two panels show the `SECONDS` up to and past its fall).
 fn fig_6_7() -> Result<Image> {
     const SECONDS: f64 = 8.0;
     const EVERY: usize = 8;
-    let iterations = (SECONDS / nunes::DT).round() as u64;
+    /// Where the gains × 27 panels begin, s (the unoptimised walker there falls at 30.75 s).
+    const LATE: f64 = 25.0;
     let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
-    let mut runs = Vec::new();
+    type Build = fn(anima_control::Controller) -> Result<Character, anima_character::CharacterError>;
+    let (gains_100, gains_27): (Build, Build) = (nunes::humanoid_character, nunes::faithful_character);
+    let faithful = crate::nunes::report::FAITHFUL_OPTIMISED;
     let walkers = [
-        ("the spec's §8.1.2 poses (before re-authoring)", crate::nunes::optimisers::spec_walker()?),
-        ("walk.ron (re-authored; before the thesis's optimisation)", nunes::controller("walk")?),
-        ("walk-optimised.ron (after)", nunes::controller("walk-optimised")?),
+        (
+            "the spec's §8.1.2 poses (before re-authoring)",
+            crate::nunes::optimisers::spec_walker()?,
+            gains_100,
+            0.0,
+        ),
+        (
+            "walk.ron (re-authored; before the thesis's optimisation)",
+            nunes::controller("walk")?,
+            gains_100,
+            0.0,
+        ),
+        ("walk-optimised.ron (after)", nunes::controller("walk-optimised")?, gains_100, 0.0),
+        (
+            "gains x 27: walk.ron (before the thesis's optimisation)",
+            nunes::controller("walk")?,
+            gains_27,
+            LATE,
+        ),
+        ("gains x 27: walk-faithful-optimised.ron (after)", nunes::controller(faithful)?, gains_27, LATE),
     ];
-    for (name, c) in walkers {
+    let mut runs = Vec::new();
+    for (name, c, build, from) in walkers {
+        let (skip, iterations) =
+            ((from / nunes::DT).round() as usize, ((from + SECONDS) / nunes::DT).round() as u64);
         let mut frames = Vec::new();
-        let out = nunes::walk(c, iterations, &rules, &[], |c| frames.push(capture(c)))?;
-        runs.push((name, out, frames));
+        let out = nunes::walk_character(build(c)?, iterations, &rules, &[], |c| frames.push(capture(c)))?;
+        frames.drain(..skip.min(frames.len()));
+        runs.push((name, out, frames, from));
     }
-    let (x0, y0, x1, y1) = bounds(runs.iter().flat_map(|r| r.2.iter()), 0.6);
+    // One scale for every panel, each panel centred on its own frames.
+    let boxes: Vec<_> = runs.iter().map(|r| bounds(r.2.iter(), 0.6)).collect();
+    let span = boxes.iter().map(|b| b.2 - b.0).fold(0.0, f64::max);
+    let top = boxes.iter().map(|b| b.3).fold(f64::NEG_INFINITY, f64::max);
     let (width, height) = (1600, 300);
-    let view = View2d::fit(x0, y0, x1, y1, width, height, 8);
     let mut panels = Vec::new();
-    for (name, out, frames) in &runs {
+    for ((name, out, frames, from), b) in runs.iter().zip(&boxes) {
+        let from = *from;
+        let x0 = 0.5 * (b.0 + b.2 - span);
+        let view = View2d::fit(x0, b.1, x0 + span, top, width, height, 8);
         let mut img = Image::new(width, height, SKY)?;
         let picked: Vec<&Frame> = frames.iter().step_by(EVERY).collect();
         strobe(&mut img, &view, &picked);
@@ -105,8 +136,10 @@ fn fig_6_7() -> Result<Image> {
             8,
             6,
             &format!(
-                "{name}: {:.1} m in {SECONDS} s{fell}; a frame every {:.1} s",
+                "{name}: {:.1} m in {} s{fell}; {from:.0} to {:.0} s, a frame every {:.1} s",
                 out.distance,
+                from + SECONDS,
+                from + SECONDS,
                 EVERY as f64 * nunes::DT
             ),
             16.0,

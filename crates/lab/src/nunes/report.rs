@@ -199,7 +199,107 @@ fn walk(repo: &Repo) -> Result<String> {
         .map(|e| format!("{:.3}", e.fitness))
         .collect();
     let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
+    s.push_str(&walk_faithful(repo)?);
     s.push_str(&walk_variants(repo)?);
+    Ok(s)
+}
+
+/// The optimised walker of [`walk_faithful`], for the humanoid of [`nunes::faithful_character`].
+pub const FAITHFUL_OPTIMISED: &str = "walk-faithful-optimised";
+
+/// A walk of `iterations` on the humanoid of [`nunes::faithful_character`] (no stop test when `long`).
+fn faithful_run(c: Controller, iterations: u64, long: bool) -> Result<nunes::WalkOutcome> {
+    let rules = if long { WalkRules { window: 0, ..WalkRules::default() } } else { WalkRules::default() };
+    Ok(nunes::walk_character(nunes::faithful_character(c)?, iterations, &rules, &[], |_| ())?)
+}
+
+/// Table 6.3's before-and-after on the configuration closest to the thesis in which it holds
+/// ([`nunes::FAITHFUL_GAIN`]): the thesis's search, unchanged, on the humanoid with gains × 27.
+fn walk_faithful(repo: &Repo) -> Result<String> {
+    let loaded = thesis_spec(repo, "walk")?;
+    let (spec, base) = (&loaded.spec, &loaded.controller);
+    let ids = base.free_params(&spec.parameters);
+    let x0 = base.values_of(&ids);
+    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let iterations = match spec.objective {
+        anima_scene::optimisation::ObjectiveSpec::Walk { iterations } => iterations,
+        _ => bail!("{}: the walking search has a walking objective", spec.name),
+    };
+    let objective =
+        |x: &[f64]| faithful_run(with_values(base, &ids, x), iterations, false).map_or(0.0, |o| o.fitness());
+    let log = optimise_logged(repo, "walk-faithful", opt.as_mut(), &objective, spec.evaluations)?;
+    let before = faithful_run(with_values(base, &ids, &x0), 1000, true)?;
+    let best = log.best().context("empty log")?;
+    let after = faithful_run(with_values(base, &ids, &best.x), 1000, false)?;
+    let long = faithful_run(with_values(base, &ids, &best.x), 20_000, true)?;
+
+    let winner = with_values(base, &ids, &best.x);
+    let header = format!(
+        "// The walking controller after the thesis's optimisation on the humanoid with gains x {g} (the\n\
+         // configuration closest to the thesis in which the unoptimised walker falls: anima_lab::nunes::\n\
+         // faithful_character): `cargo xtask reproduce nunes-walk`, greedy search, 15 global + 30\n\
+         // one-parameter evaluations, seed {SEED}; the winner's thresholds p2, p3, p5, p6 = {}.\n\
+         // Everything else is assets/controllers/walk.ron.\n",
+        best.x.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>().join(", "),
+        g = nunes::FAITHFUL_GAIN,
+    );
+    repo.write_text(
+        &format!("assets/controllers/{FAITHFUL_OPTIMISED}.ron"),
+        &format!("{header}{}", winner.to_ron()),
+    )?;
+
+    let mut s = String::from("\n### The thesis's before-and-after, on gains × 27\n\n");
+    let _ = writeln!(
+        s,
+        "With the experiments' gains (× 100) the unoptimised walker walks, so the table above cannot show the \
+         thesis's central result. [nunes-walk-faithful.md](nunes-walk-faithful.md) searched the actuation \
+         readings of the spec (ODE-style and implicit springs, G from 1 to 100, gravity scaled): with the \
+         spec's §8.1.2 poses none walks before or after the search; with the re-authored poses of `walk.ron` \
+         the walker falls before the search and walks after it at G = 26 and 27, and walks before it from \
+         G = 28. Here the same search (`walk.ron`, seed {SEED}) runs on implicit springs with every gain, \
+         cap and brake × {} (`anima_lab::nunes::faithful_character`), 4 physics sub-steps, Δt = 0.05 s. That \
+         this configuration shows the before-and-after holds by construction: G was picked by the scan for \
+         it. The winner is `assets/controllers/{FAITHFUL_OPTIMISED}.ron`.\n",
+        nunes::FAITHFUL_GAIN
+    );
+    s.push_str("| quantity | thesis (Nunes 2006) | anima, gains × 27 |\n|---|---|---|\n");
+    let _ = writeln!(
+        s,
+        "| fitness before optimisation (p = 0.25) | 0.000 (falls) | {:.3} ({}) |",
+        before.fitness(),
+        if before.fell { format!("falls after {} iterations", before.iterations) } else { "walks".into() }
+    );
+    let _ = writeln!(s, "| fitness after 45 evaluations (m in 50 s) | 10.528 | {:.3} |", after.fitness());
+    let _ = writeln!(s, "| mean speed over 50 s (m/s) | 0.21 | {:.2} |", after.distance / 50.0);
+    let _ = writeln!(
+        s,
+        "| distance before falling, long run (m) | 45.147 | {:.1}{} |",
+        long.distance,
+        if long.fell {
+            format!(" (falls after {} iterations)", long.iterations)
+        } else {
+            format!(
+                " (still walking after {} iterations = {:.0} s)",
+                long.iterations,
+                long.iterations as f64 * nunes::DT
+            )
+        }
+    );
+    let first_walker = log.evaluations.iter().position(|e| e.fitness > 0.0);
+    let _ = writeln!(
+        s,
+        "| first evaluation that walks | — | {} |",
+        first_walker.map_or("none".to_string(), |k| format!("evaluation {k} of {}", log.len() - 1))
+    );
+    let walkers = log.evaluations.iter().filter(|e| e.fitness > 0.0).count();
+    let _ = writeln!(
+        s,
+        "\n{walkers} of the {} evaluations walk the 50 s. The walker is about {:.0} times as fast as the thesis's: \
+         the poses were re-authored for this body, and the thresholds the search tunes decide when a step \
+         ends, not how long it is.\n",
+        log.len(),
+        (after.distance / 50.0) / 0.21
+    );
     Ok(s)
 }
 
