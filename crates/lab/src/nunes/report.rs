@@ -244,7 +244,7 @@ fn walk_faithful(repo: &Repo) -> Result<String> {
         g = nunes::FAITHFUL_GAIN,
     );
     repo.write_text(
-        &format!("assets/controllers/{FAITHFUL_OPTIMISED}.ron"),
+        format!("assets/controllers/{FAITHFUL_OPTIMISED}.ron"),
         &format!("{header}{}", winner.to_ron()),
     )?;
 
