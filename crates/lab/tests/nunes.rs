@@ -111,6 +111,42 @@ fn the_faithful_configuration_falls_before_the_search_and_walks_after_it() {
     assert!(after.fitness() > 10.0, "{after:?}");
 }
 
+/// A walk pushed on the head with `impulse` N·s at 10 s: whether the head touched the ground in the
+/// 3 s after, and whether PROTECT-FWD ran.
+fn head_push(name: &str, impulse: f64) -> (bool, bool) {
+    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
+    let push = nunes::Push::impulse(impulse, 200, 2);
+    let (mut head_down, mut protected) = (false, false);
+    let c = nunes::controller(name).unwrap();
+    nunes::walk(c, 260, &rules, &[push], |c| {
+        let head = c.env.world.skeleton(0).unwrap().body_index("head").unwrap();
+        head_down |= c.env.sensors[0].on_ground[head];
+        protected |=
+            c.controller.machines().iter().any(|m| m.name() == "PROTECT-FWD" && m.current_state().is_some());
+    })
+    .unwrap();
+    (head_down, protected)
+}
+
+#[test]
+fn the_protective_machines_keep_the_head_off_the_ground_in_a_forward_fall() {
+    // Variant C (spec §8.1.9, nunes-results.md): pushed from behind, walk.ron falls on its head;
+    // walk-protected.ron raises its arms and lands on them.
+    assert_eq!(head_push("walk", 100.0), (true, false));
+    assert_eq!(head_push("walk-protected", 100.0), (false, true));
+}
+
+#[test]
+fn the_protected_walker_walks_as_walk_ron_until_it_falls() {
+    // walk-protected.ron is walk.ron plus two sensory machines that stay idle while it walks.
+    let run = |name: &str| {
+        nunes::walk(nunes::controller(name).unwrap(), 400, &WalkRules::default(), &[], |_| ()).unwrap()
+    };
+    let (plain, protected) = (run("walk"), run("walk-protected"));
+    assert!(!plain.fell, "{plain:?}");
+    assert_eq!(plain.distance.to_bits(), protected.distance.to_bits(), "{plain:?} {protected:?}");
+}
+
 #[test]
 fn the_thrower_releases_the_ball_when_t2_fires() {
     // T1: 80 iterations in E1 (0–79); T2: τ2 = 20 iterations in E2 (80–99), the release fires on its

@@ -1,6 +1,6 @@
 //! `cargo xtask figures` for Nunes 2006: strobe pictures of the walker before and after optimisation
 //! (Fig. 6.7), the throw (Fig. 6.12) and the assisted backflip (Fig. 6.17), the robust and SIMBICON
-//! walkers under pushes, and the best fitness against evaluations of every optimiser on the walking and
+//! walkers under pushes, variant C's protective machines under head pushes (Figs. 4.7, 6.9), and the best fitness against evaluations of every optimiser on the walking and
 //! throwing objectives.
 //!
 //! A strobe picture overlays the figure every few control iterations, older frames faded towards the
@@ -244,24 +244,46 @@ fn fig_6_17() -> Result<Image> {
 /// and its SIMBICON form (`walk-simbicon.ron`), each pushed 20 N·s forward and backward on the head
 /// 20 s into the walk (the pushes of `nunes-optimisers`), from 0.5 s before the push to 5 s after.
 fn fig_pushes() -> Result<Image> {
-    const IMPULSE: f64 = 20.0;
-    const AT: u64 = 400;
-    const DURATION: u64 = 2;
-    let (first, last, every) = (AT - 10, AT + 100, 5);
-    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
     let walkers = [
         ("walk-robust.ron (the thesis's machines)", "walk-robust"),
         ("walk-simbicon.ron (SIMBICON form)", "walk-simbicon"),
     ];
+    // 10 s after the push, as the push survival of `nunes-optimisers` counts it.
+    stack(&push_panels(&walkers, 20.0, 400, 100, 200, 5)?)
+}
+
+/// Variant C (spec §8.1.9, the thesis's Figs. 4.7 and 6.9): `walk.ron` and `walk-protected.ron`
+/// pushed on the head, forward and backward, 100 N·s over 0.1 s.
+fn fig_protective() -> Result<Image> {
+    let walkers = [
+        ("walk.ron (no protective machines)", "walk"),
+        ("walk-protected.ron (PROTECT-FWD, PROTECT-BACK)", "walk-protected"),
+    ];
+    stack(&push_panels(&walkers, 100.0, 200, 40, 60, 4)?)
+}
+
+/// Strobes of each walker pushed on the head `impulse` N·s forward and then backward over two
+/// iterations from iteration `at`: from 10 iterations before the push to `shown` after it, a frame
+/// every `every`, the run going on `run` iterations after the push.
+fn push_panels(
+    walkers: &[(&str, &str)],
+    impulse: f64,
+    at: u64,
+    shown: u64,
+    run: u64,
+    every: u64,
+) -> Result<Vec<Image>> {
+    const DURATION: u64 = 2;
+    let (first, last) = (at - 10, at + shown);
+    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
     let (width, height) = (1600, 260);
     let mut panels = Vec::new();
     for (name, text) in walkers {
         for direction in [1.0, -1.0] {
-            let push = nunes::Push::impulse(direction * IMPULSE, AT, DURATION);
+            let push = nunes::Push::impulse(direction * impulse, at, DURATION);
             let mut frames = Vec::new();
             let mut k = 0;
-            // 10 s after the push, as the push survival of `nunes-optimisers` counts it.
-            let out = nunes::walk(nunes::controller(text)?, AT + 200, &rules, &[push], |c| {
+            let out = nunes::walk(nunes::controller(text)?, at + run, &rules, &[push], |c| {
                 k += 1;
                 if (first..=last).contains(&k) && (k - first) % every == 0 {
                     frames.push(capture(c));
@@ -273,8 +295,9 @@ fn fig_pushes() -> Result<Image> {
             let mut img = Image::new(width, height, SKY)?;
             strobe(&mut img, &view, &picked);
             // An arrow onto the head where the push began.
-            let at = &frames[((AT - first) / every) as usize];
-            if let Some(head) = at.iter().flatten().map(|p| p.centre).max_by(|a, b| a[1].total_cmp(&b[1])) {
+            let pushed = &frames[((at - first) / every) as usize];
+            if let Some(head) = pushed.iter().flatten().map(|p| p.centre).max_by(|a, b| a[1].total_cmp(&b[1]))
+            {
                 let tail = [head[0] - direction * 0.6, head[1]];
                 let red = [200, 30, 30];
                 draw_line(&mut img, view.to_px(tail[0], tail[1]), view.to_px(head[0], head[1]), 4.0, red);
@@ -284,9 +307,11 @@ fn fig_pushes() -> Result<Image> {
                 8,
                 6,
                 &format!(
-                    "{name}: {IMPULSE} N·s {} on the head at 20 s; {} 10 s later; a frame every {:.2} s",
+                    "{name}: {impulse} N·s {} on the head at {:.0} s; {} {:.0} s later; a frame every {:.2} s",
                     if direction > 0.0 { "forward" } else { "backward" },
+                    at as f64 * nunes::DT,
                     if out.fell { "fallen" } else { "still walking" },
+                    run as f64 * nunes::DT,
                     every as f64 * nunes::DT
                 ),
                 16.0,
@@ -294,7 +319,7 @@ fn fig_pushes() -> Result<Image> {
             panels.push(img);
         }
     }
-    stack(&panels)
+    Ok(panels)
 }
 
 /// Best fitness so far against evaluations, one line per optimiser.
@@ -388,6 +413,8 @@ pub fn figures(repo: &Repo) -> Result<()> {
     save("nunes-fig-6-17-backflip.png", &fig_6_17().context("Fig. 6.17")?)?;
     eprintln!("anima-lab: pushes on the robust and SIMBICON walkers …");
     save("nunes-pushes.png", &fig_pushes().context("push figure")?)?;
+    eprintln!("anima-lab: variant C under head pushes (Figs. 4.7, 6.9) …");
+    save("nunes-protective.png", &fig_protective().context("protective figure")?)?;
     eprintln!("anima-lab: walking fitness against evaluations …");
     save("nunes-walk-fitness.png", &walk_fitness_figure(repo)?)?;
     eprintln!("anima-lab: throwing fitness against evaluations …");

@@ -201,6 +201,115 @@ fn walk(repo: &Repo) -> Result<String> {
     let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
     s.push_str(&walk_faithful(repo)?);
     s.push_str(&walk_variants(repo)?);
+    s.push_str(&walk_protected()?);
+    Ok(s)
+}
+
+/// What a head push did to a walker (variant C's experiment).
+#[derive(Debug, Clone)]
+struct Fall {
+    fell: bool,
+    /// The protective machine that ran first, and the iteration after the push it began.
+    protected: Option<(String, u64)>,
+    /// The first body other than a foot on the ground after the push, and the iteration after the
+    /// push it touched.
+    first_down: Option<(String, u64)>,
+    head_down: bool,
+}
+
+/// Iteration of the head pushes of variant C's experiment (10 s into the walk), and how long the run
+/// goes on after it.
+const PUSH_AT: u64 = 200;
+const AFTER_PUSH: u64 = 80;
+
+fn pushed_walk(controller: Controller, impulse: f64) -> Result<Fall> {
+    let push = nunes::Push::impulse(impulse, PUSH_AT, 2);
+    let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
+    let (mut protected, mut first_down, mut head_down) = (None, None, false);
+    let mut k = 0u64;
+    let out = nunes::walk(controller, PUSH_AT + AFTER_PUSH, &rules, &[push], |c| {
+        k += 1;
+        if k <= PUSH_AT {
+            return;
+        }
+        let after = k - PUSH_AT;
+        if protected.is_none()
+            && let Some(m) = c
+                .controller
+                .machines()
+                .iter()
+                .find(|m| m.name().starts_with("PROTECT") && m.current_state().is_some())
+        {
+            protected = Some((m.name().to_string(), after));
+        }
+        let Ok(sk) = c.env.world.skeleton(0) else { return };
+        for (b, &on) in c.env.sensors[0].on_ground.iter().enumerate() {
+            let body = sk.body(b);
+            if on && !body.name.starts_with("foot") {
+                head_down |= body.name == "head";
+                if first_down.is_none() {
+                    first_down = Some((body.name.clone(), after));
+                }
+            }
+        }
+    })?;
+    Ok(Fall { fell: out.fell, protected, first_down, head_down })
+}
+
+/// Variant C (spec §8.1.9) on the humanoid: `walk-protected.ron` beside `walk.ron` under pushes on
+/// the head, forward (from behind) and backward, measured by which body meets the ground first.
+fn walk_protected() -> Result<String> {
+    let mut s = String::from("\n### Variant C under head pushes (spec §8.1.9)\n\n");
+    let _ = writeln!(
+        s,
+        "Thesis (§6.3.1, Figs. 4.7, 6.9): pushed on the back of the head the walker falls forward, and \
+         without the protective machines it keeps trying to walk and hits the ground with its head; with \
+         them it raises its arms in front of the head. Pushed on the front it falls backward, and the \
+         protective machine puts the arms behind the body. Here `walk.ron` and `walk-protected.ron` (the \
+         same walker plus PROTECT-FWD and PROTECT-BACK with the spec's proposed tolerances, hold-off, \
+         weight and poses) walk {:.0} s, are pushed on the head for 0.1 s, and run {:.0} s more; the table \
+         gives the first body other than a foot to touch the ground (and when, after the push began), \
+         whether the head touched at all, and the protective machine that ran.\n",
+        PUSH_AT as f64 * nunes::DT,
+        AFTER_PUSH as f64 * nunes::DT
+    );
+    s.push_str(
+        "| push on the head (N·s) | controller | falls | first body down (s after the push) | head on the ground | protective machine (s after the push) |\n\
+         |---|---|---|---|---|---|\n",
+    );
+    let seconds = |k: u64| format!("{:.2}", k as f64 * nunes::DT);
+    let mut protected_heads = [0usize; 2];
+    let mut bare_heads = [0usize; 2];
+    let mut falls = [0usize; 2];
+    for impulse in [60.0, 100.0, 150.0, -60.0, -100.0, -150.0] {
+        for (k, name) in ["walk", "walk-protected"].into_iter().enumerate() {
+            let f = pushed_walk(nunes::controller(name)?, impulse)?;
+            if f.fell {
+                falls[k] += 1;
+                if f.head_down {
+                    if k == 1 {
+                        protected_heads[usize::from(impulse < 0.0)] += 1;
+                    } else {
+                        bare_heads[usize::from(impulse < 0.0)] += 1;
+                    }
+                }
+            }
+            let _ = writeln!(
+                s,
+                "| {impulse:+.0} | `{name}.ron` | {} | {} | {} | {} |",
+                if f.fell { "yes" } else { "no" },
+                f.first_down.map_or("—".to_string(), |(b, k)| format!("{b} ({})", seconds(k))),
+                if f.head_down { "yes" } else { "no" },
+                f.protected.map_or("none".to_string(), |(m, k)| format!("{m} ({})", seconds(k))),
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nFalls: {} of 6 pushed runs without the protective machines, {} with them. The head met the \
+         ground in {} forward and {} backward falls without them, {} and {} with them.",
+        falls[0], falls[1], bare_heads[0], bare_heads[1], protected_heads[0], protected_heads[1]
+    );
     Ok(s)
 }
 
