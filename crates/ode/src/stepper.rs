@@ -185,6 +185,7 @@ impl<C: Coord> Stepper<C> {
         if let (Some(from), Some(to)) = (&self.implicit, &mut s.implicit) {
             to.solver = from.solver;
             to.newton_iterations = from.newton_iterations;
+            to.newton_contraction = from.newton_contraction;
             if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
                 b.params = a.params;
             }
@@ -249,6 +250,21 @@ impl<C: Coord> Stepper<C> {
         if let Some(ws) = &mut self.implicit {
             ws.newton_iterations = iterations.max(1);
         }
+    }
+
+    /// Generalised-α's early stop: after two Newton iterations the rest are skipped once an update is at
+    /// most `ratio` times the one before in the mass norm. The default is
+    /// [`crate::DEFAULT_NEWTON_CONTRACTION`]; 0 runs every planned iteration. No effect on other
+    /// integrators.
+    pub fn set_newton_contraction(&mut self, ratio: f64) {
+        if let Some(ws) = &mut self.implicit {
+            ws.newton_contraction = ratio.max(0.0);
+        }
+    }
+
+    /// Generalised-α's early-stop ratio (`None` for explicit integrators).
+    pub fn newton_contraction(&self) -> Option<f64> {
+        self.implicit.as_ref().map(|w| w.newton_contraction)
     }
 
     /// Like [`Stepper::reset_history`], for a change that touched only the coordinates flagged in

@@ -18,11 +18,25 @@ pub(crate) struct SystemMatrix<C: Coord> {
     pub off: Vec<C::Block>,
     /// A_ii⁻¹ (or the inverse of its diagonal when A_ii is singular).
     pub jacobi: Vec<C::Block>,
+    /// The pairs in spring form (u_e, a_e), off_e = −(u_e u_eᵀ + a_e I), when `spring_form`.
+    pub springs: Vec<(C, f64)>,
+    /// The masses of the diagonal, when `spring_form`.
+    pub masses: Vec<f64>,
+    /// Whether `springs` and `masses` describe the matrix: A = M + Σ_e B_e (e_i − e_j)(e_i − e_j)ᵀ
+    /// ([`super::Linearized::spring_form`]), and [`Self::mul`] multiplies from them.
+    pub spring_form: bool,
 }
 
 impl<C: Coord> SystemMatrix<C> {
     pub fn new() -> Self {
-        Self { diag: Vec::new(), off: Vec::new(), jacobi: Vec::new() }
+        Self {
+            diag: Vec::new(),
+            off: Vec::new(),
+            jacobi: Vec::new(),
+            springs: Vec::new(),
+            masses: Vec::new(),
+            spring_form: false,
+        }
     }
 
     /// Sets the sizes; allocates only when they grow.
@@ -36,6 +50,7 @@ impl<C: Coord> SystemMatrix<C> {
     /// A = M − β D − β₂ K from Jacobians (backward Euler and BDF2 pass β₂ = β²), and its block-Jacobi
     /// preconditioner.
     pub fn assemble(&mut self, jac: &Jacobians<C>, masses: &[f64], beta: f64, beta2: f64) {
+        self.spring_form = false;
         for i in 0..masses.len() {
             let m = C::block_identity(masses[i]);
             let hd = C::block_combine(jac.d_diag[i], beta, jac.k_diag[i], beta2);
@@ -54,10 +69,29 @@ impl<C: Coord> SystemMatrix<C> {
             *a = C::block_combine(*a, 1.0, C::block_identity(m), 1.0);
             *j = C::block_inverse(*a);
         }
+        if self.spring_form {
+            self.masses.clear();
+            self.masses.extend_from_slice(masses);
+        }
     }
 
     /// y = A x, then filtered.
     pub fn mul(&self, pattern: &[(u32, u32)], filter: Filter<'_, C>, x: &[C], y: &mut [C]) {
+        if self.spring_form {
+            // y_i = m_i x_i + Σ_e B_e (x_i − x_j), and its negative at j.
+            for i in 0..x.len() {
+                y[i] = x[i] * self.masses[i];
+            }
+            for (&(i, j), &(u, a)) in pattern.iter().zip(&self.springs) {
+                let (i, j) = (i as usize, j as usize);
+                let d = x[i] - x[j];
+                let b = u * u.dot(d) + d * a;
+                y[i] += b;
+                y[j] = y[j] - b;
+            }
+            filter.apply(y);
+            return;
+        }
         for i in 0..x.len() {
             y[i] = C::block_mul(self.diag[i], x[i]);
         }

@@ -42,6 +42,9 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     /// on stiff, damped springs (measured on the Oliveira sheet of `cargo xtask bench`); generalised-α
     /// to [`super::alpha::DEFAULT_NEWTON_ITERATIONS`].
     pub newton_iterations: usize,
+    /// Generalised-α stops its Newton iterations early once an update contracts to this fraction of
+    /// the one before ([`super::alpha::DEFAULT_NEWTON_CONTRACTION`]; 0 never stops early).
+    pub newton_contraction: f64,
     pub(super) f: Vec<C>,
     pub(super) jac: Jacobians<C>,
     pub(super) a: SystemMatrix<C>,
@@ -84,6 +87,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         Self {
             solver: LinearSolver::default_cg(),
             newton_iterations: if bdf2 { 2 } else { 1 },
+            newton_contraction: 0.0,
             f: zeros(),
             jac: Jacobians::new(n, 0),
             a: SystemMatrix::new(),
