@@ -6,7 +6,7 @@
 //! f_i = (k (L − L0) + c (v_j − v_i)·n) n, f_j = −f_i (k in N/m, c in N·s/m).
 
 use anima_geom::DVec3;
-use anima_ode::{Jacobians, Linearized, OdeSystem};
+use anima_ode::{Jacobians, Linearized, OdeSystem, SpringBlock};
 use glam::DMat3;
 
 /// What a spring stands for in a sheet; only used for counting and reporting.
@@ -398,25 +398,25 @@ impl Linearized<DVec3> for SpringNetwork {
         f: &mut [DVec3],
         diag: &mut [DMat3],
         off: &mut [DMat3],
-        springs: &mut [(DVec3, f64)],
+        mut springs: Option<&mut Vec<SpringBlock<DVec3>>>,
         _scratch: &mut Jacobians<DVec3>,
     ) {
         for (fi, m) in f.iter_mut().zip(&self.masses) {
             *fi = self.gravity * *m;
         }
         diag.fill(DMat3::ZERO);
-        let (spring_form, blocks) = (!springs.is_empty(), !off.is_empty());
+        let blocks = !off.is_empty();
+        if let Some(list) = springs.as_deref_mut() {
+            list.clear();
+        }
         for (e, s) in self.springs.iter().enumerate() {
             let (i, j) = (s.i as usize, s.j as usize);
             let d = x[j] - x[i];
             let l = d.length();
+            if blocks {
+                off[e] = DMat3::ZERO;
+            }
             if l == 0.0 {
-                if blocks {
-                    off[e] = DMat3::ZERO;
-                }
-                if spring_form {
-                    springs[e] = (DVec3::ZERO, 0.0);
-                }
                 continue;
             }
             let n = d / l;
@@ -436,9 +436,9 @@ impl Linearized<DVec3> for SpringNetwork {
             }
             diag[i] += block;
             diag[j] += block;
-            if spring_form {
+            if let Some(list) = springs.as_deref_mut() {
                 // B = u uᵀ + a I with u = n √along (along ≥ 0: 1 − g = L0/L and the damping ≥ 0).
-                springs[e] = (n * along.sqrt(), across);
+                list.push(SpringBlock { i: s.i, j: s.j, pair: e as u32, u: n * along.sqrt(), a: across });
             }
         }
     }
@@ -753,8 +753,7 @@ mod system_tests {
         let (mut f1, mut f2) = (vec![DVec3::ZERO; 25], vec![DVec3::ZERO; 25]);
         let (mut d1, mut o1) = (vec![DMat3::ZERO; 25], vec![DMat3::ZERO; pairs]);
         let mut scratch = Jacobians::new(25, pairs);
-        let mut springs = vec![(DVec3::ZERO, 0.0); pairs];
-        net.force_and_system(0.0, &x, &v, bv, bx, &mut f1, &mut d1, &mut o1, &mut springs, &mut scratch);
+        net.force_and_system(0.0, &x, &v, bv, bx, &mut f1, &mut d1, &mut o1, None, &mut scratch);
         let mut jac = Jacobians::new(25, pairs);
         net.force_and_jacobians(0.0, &x, &v, &mut f2, &mut jac);
         for i in 0..25 {

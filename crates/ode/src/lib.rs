@@ -66,10 +66,12 @@ mod stepper;
 
 pub use control::{IntegrationError, IntegrationStats, StepControl, integrate};
 pub use coord::Coord;
-pub use implicit::alpha::{AlphaParameters, DEFAULT_NEWTON_CONTRACTION, DEFAULT_NEWTON_ITERATIONS, DEFAULT_RHO_INF};
+pub use implicit::alpha::{
+    AlphaParameters, DEFAULT_NEWTON_CONTRACTION, DEFAULT_NEWTON_ITERATIONS, DEFAULT_RHO_INF,
+};
 pub use implicit::contact;
 pub use implicit::workspace::SolveProfile;
-pub use implicit::{Jacobians, LinearSolver, Linearized};
+pub use implicit::{Jacobians, LinearSolver, Linearized, SpringBlock};
 pub use integrator::{Integrator, ParseIntegratorError};
 pub use stepper::{OdeError, State, StepStats, Stepper};
 

@@ -245,10 +245,13 @@ impl<C: Coord> Stepper<C> {
     /// Newton iterations per step of the implicit methods (at least 1). Backward Euler defaults to 1,
     /// Baraff and Witkin's single linearisation; BDF2 to 2; generalised-α to
     /// [`crate::DEFAULT_NEWTON_ITERATIONS`]. More iterations solve the nonlinear step equations more
-    /// closely, which BDF2 needs to keep its second order on stiff, damped springs.
+    /// closely, which BDF2 needs to keep its second order on stiff, damped springs. A count set here
+    /// runs in full: it also turns generalised-α's early stop off ([`Stepper::set_newton_contraction`],
+    /// which can turn it on again afterwards).
     pub fn set_newton_iterations(&mut self, iterations: usize) {
         if let Some(ws) = &mut self.implicit {
             ws.newton_iterations = iterations.max(1);
+            ws.newton_contraction = 0.0;
         }
     }
 

@@ -369,3 +369,28 @@ fn an_overflowing_force_is_an_error_not_a_frozen_state() {
         }
     }
 }
+
+/// Generalised-α's default Newton count stops early once the updates contract; a count set by hand
+/// runs in full.
+#[test]
+fn generalized_alpha_stops_newton_early_only_by_default() {
+    let (n, h, steps) = (40, 1.0 / 60.0, 10);
+    let newton_per_step = |set: Option<usize>| {
+        let mut chain = Chain::new(n);
+        let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
+        if let Some(k) = set {
+            stepper.set_newton_iterations(k);
+        }
+        stepper.set_profiling(true);
+        let (mut now, mut next) = (start(n), start(n));
+        for s in 0..steps {
+            stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
+            std::mem::swap(&mut now, &mut next);
+        }
+        let p = stepper.profile().expect("profiled");
+        p.newton_iterations as f64 / p.steps as f64
+    };
+    let default = newton_per_step(None);
+    assert!((2.0..3.0).contains(&default), "{default} Newton iterations per step by default");
+    assert_eq!(newton_per_step(Some(3)), 3.0);
+}

@@ -135,7 +135,7 @@ impl<C: Coord> Clone for RigidAggregation<C> {
 
 impl<C: Coord> Default for RigidAggregation<C> {
     fn default() -> Self {
-        Self::new(std::env::var("RADIUS").ok().and_then(|s| s.parse().ok()).unwrap_or(RADIUS), SWEEPS)
+        Self::new(RADIUS, SWEEPS)
     }
 }
 
@@ -341,7 +341,7 @@ impl<C: Coord> RigidAggregation<C> {
             *b = [[0.0; MAX_PER]; MAX_PER];
         }
         if a.spring_form {
-            self.galerkin_springs(a, pattern, masses);
+            self.galerkin_springs(a, masses);
         } else {
             self.galerkin_blocks(a, pattern);
         }
@@ -403,7 +403,7 @@ impl<C: Coord> RigidAggregation<C> {
     /// on their diagonals and −Rᵢᵀ B R_j between them. The same matrix as [`Self::galerkin_blocks`] up
     /// to round-off, in about half the time (no 3 × 3 block products, and none of the cancellation
     /// between a spring's diagonal and pair terms inside an aggregate).
-    fn galerkin_springs(&mut self, a: &SystemMatrix<C>, pattern: &[(u32, u32)], masses: &[f64]) {
+    fn galerkin_springs(&mut self, a: &SystemMatrix<C>, masses: &[f64]) {
         let per = self.per;
         let comps =
             |c: C| -> [f64; 3] { std::array::from_fn(|k| if k < C::DIM { c.component(k) } else { 0.0 }) };
@@ -428,10 +428,9 @@ impl<C: Coord> RigidAggregation<C> {
                 }
             }
         }
-        for (e, &(i, j)) in pattern.iter().enumerate() {
-            let (i, j) = (i as usize, j as usize);
+        for &super::SpringBlock { i, j, pair, u, a: s } in &a.springs {
+            let (i, j, e) = (i as usize, j as usize, pair as usize);
             let (gi, gj) = (self.agg[i], self.agg[j]);
-            let (u, s) = a.springs[e];
             let u = comps(u);
             if per == 1 {
                 if gi == gj {
@@ -459,7 +458,8 @@ impl<C: Coord> RigidAggregation<C> {
                 let d = &mut self.d_blocks[gi as usize];
                 for p in 0..3 {
                     for q in 0..3 {
-                        d[p][q] += w[p] * w[q] + s * (k[0][p] * k[0][q] + k[1][p] * k[1][q] + k[2][p] * k[2][q]);
+                        d[p][q] +=
+                            w[p] * w[q] + s * (k[0][p] * k[0][q] + k[1][p] * k[1][q] + k[2][p] * k[2][q]);
                     }
                 }
                 continue;
@@ -472,8 +472,11 @@ impl<C: Coord> RigidAggregation<C> {
             if gi != NONE && gj != NONE {
                 let o = &mut self.o_blocks[self.pair_of[e] as usize];
                 // The coarse pair is stored as (lower aggregate, higher aggregate).
-                let (la, lb) =
-                    if self.flip[e] { (self.lever[j], self.lever[i]) } else { (self.lever[i], self.lever[j]) };
+                let (la, lb) = if self.flip[e] {
+                    (self.lever[j], self.lever[i])
+                } else {
+                    (self.lever[i], self.lever[j])
+                };
                 add_spring_galerkin(o, la, lb, u, s, -1.0);
             }
         }
@@ -630,7 +633,7 @@ mod tests {
         for (e, &(i, j)) in pattern.iter().enumerate() {
             let d = (x[j as usize] - x[i as usize]).normalize();
             let (u, s) = (d * (3.0 + wobble(e, 0.9)), 0.4 + 0.3 * wobble(e, 1.7));
-            a.springs.push((u, s));
+            a.springs.push(super::super::SpringBlock { i, j, pair: e as u32, u, a: s });
             let b = DVec3::block_combine(DVec3::block_outer(u, u), 1.0, DVec3::block_identity(s), 1.0);
             a.off[e] = DVec3::block_combine(b, -1.0, b, 0.0);
             a.diag[i as usize] = DVec3::block_combine(a.diag[i as usize], 1.0, b, 1.0);
@@ -659,7 +662,8 @@ mod tests {
     #[test]
     fn the_spring_form_product_equals_the_block_one() {
         let (mut a, pattern, ..) = spring_system();
-        let x: Vec<DVec3> = (0..36).map(|k| DVec3::new((k as f64).cos(), (k as f64 * 0.3).sin(), 0.5)).collect();
+        let x: Vec<DVec3> =
+            (0..36).map(|k| DVec3::new((k as f64).cos(), (k as f64 * 0.3).sin(), 0.5)).collect();
         let (mut y1, mut y2) = (vec![DVec3::ZERO; 36], vec![DVec3::ZERO; 36]);
         a.mul(&pattern, Filter::None, &x, &mut y1);
         a.spring_form = false;

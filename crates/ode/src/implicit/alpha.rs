@@ -58,21 +58,28 @@ pub const DEFAULT_RHO_INF: f64 = 0.2;
 /// Newton iterations per step when none is set (the planned ones; up to two more run while contacts
 /// change regime). Measured on the standard sheet (N = 64, 1 s at 1/60 s) with the default solver
 /// (rigid-aggregation CG to a relative residual of 0.1 per iteration; `cargo run --release -p
-/// anima-cloth --example large_steps -- probe`, with `NEWTON=k`): 2 iterations err 6.5 mm at the centre
-/// of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms per step, 3 iterations 13 mm
-/// (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very stiff sheet of the hard
+/// anima-cloth --example large_steps -- probe`, with `NEWTON=k`, before the spring-form matrix): 2
+/// iterations err 6.5 mm at the centre of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms
+/// per step, 3 iterations 13 mm (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very stiff sheet of the hard
 /// cases (k = 10⁵ N/m, `implicit_hard_cases`): its largest strain reaches 11.6 % with two (7.8 % with
 /// three; a looser relative residual of 0.2 with three let it swing up to 23 m/s). With exact solves
 /// one iteration, linearised at the predicted state, errs 490 mm and two 12 mm (ρ∞ = 0.4). The centre
 /// of mass of a folding sheet moves chaotically with small changes: the RMS error is the steadier
 /// measure, and differences in the centre of mass below 10 mm are noise.
 ///
+/// These are the most a step runs: after two, the rest are skipped once the updates have contracted
+/// ([`DEFAULT_NEWTON_CONTRACTION`]); on the standard sheet a step then runs 2.1 on average.
+///
 /// Predicting the end velocity from earlier steps instead of w = v₀ (constant acceleration, the last
 /// step's velocity change, linear or quadratic extrapolation of the positions) was measured worse
 /// with every Newton count: the method's acceleration and velocity carry the unconverged residue of
 /// the stiff springs, and extrapolating it starts Newton far from the solution (metres of error with
 /// inexact solves). Stopping Newton on a residual ratio instead of a count did not pay either: the
-/// ratio after two iterations is spread alike on the standard sheet and on the stiff one.
+/// ratio after two iterations is spread alike on the standard sheet and on the stiff one. The ratio of
+/// successive updates separates them better but not cleanly (medians 0.17 and 0.46, tails
+/// overlapping), so it ends iterations early within the count rather than replacing it; more
+/// iterations for the stiff sheet when it has not contracted (4 at most) were measured to swing it
+/// harder, not less (largest strain 99 % against 9 % with three).
 pub const DEFAULT_NEWTON_ITERATIONS: usize = 3;
 
 /// The method's parameters for a spectral radius ρ∞ (clamped to [0, 1]).
@@ -177,8 +184,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             params: AlphaParameters::new(DEFAULT_RHO_INF),
         });
         ws.newton_iterations = DEFAULT_NEWTON_ITERATIONS;
-        ws.newton_contraction =
-            std::env::var("CONTRACTION").ok().and_then(|s| s.parse().ok()).unwrap_or(DEFAULT_NEWTON_CONTRACTION);
+        ws.newton_contraction = DEFAULT_NEWTON_CONTRACTION;
         #[cfg(feature = "sparse-cholesky")]
         {
             ws.solver = super::LinearSolver::default_aggregation();
@@ -449,8 +455,6 @@ impl<C: Coord> ImplicitWorkspace<C> {
         let t_star = t + (1.0 - alpha_f) * h;
         if with_matrix {
             self.a.spring_form = lin.spring_form();
-            let n_springs = if self.a.spring_form { lin.pattern().len() } else { 0 };
-            self.a.springs.resize(n_springs, (C::default(), 0.0));
             // Conjugate gradients and the rigid aggregation work from the spring form alone.
             let blocks = !self.a.spring_form || self.solver.needs_blocks();
             let off = if blocks { &mut self.a.off[..] } else { &mut [] };
@@ -463,7 +467,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 &mut self.f,
                 &mut self.a.diag,
                 off,
-                &mut self.a.springs,
+                self.a.spring_form.then_some(&mut self.a.springs),
                 &mut self.jac,
             );
             self.a.add_masses(lin.masses());

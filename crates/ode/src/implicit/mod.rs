@@ -76,9 +76,10 @@ pub trait Linearized<C: Coord> {
 
     /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass: `diag`
     /// gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off` gets −β_v D_ij − β_x K_ij on
-    /// the pattern; a system in [`Linearized::spring_form`] also writes each pair's (u_e, a_e) into
-    /// `springs` when it is not empty (off_e = −(u_e u_eᵀ + a_e I), and `diag` must then be the sum of
-    /// the B_e of its pairs exactly), and is passed an empty `off` when the solver needs no blocks. The implicit steps call this once per Newton iteration; the
+    /// the pattern; a system in [`Linearized::spring_form`] is passed `springs` and replaces its
+    /// contents with the pairs of the matrix in spring form (off_e = −(u uᵀ + a I) for each, the other
+    /// pattern pairs zero, and `diag` the sum of their B exactly), and is passed an empty `off` when
+    /// the solver needs no blocks. The implicit steps call this once per Newton iteration; the
     /// default goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` as
     /// it is, and a system whose Jacobians are sums over pairs can override it to skip the four
     /// intermediate block arrays.
@@ -93,7 +94,7 @@ pub trait Linearized<C: Coord> {
         f: &mut [C],
         diag: &mut [C::Block],
         off: &mut [C::Block],
-        springs: &mut [(C, f64)],
+        springs: Option<&mut Vec<SpringBlock<C>>>,
         scratch: &mut Jacobians<C>,
     ) {
         let _ = springs;
@@ -107,6 +108,17 @@ pub trait Linearized<C: Coord> {
             *a = C::block_combine(d, -beta_v, k, -beta_x);
         }
     }
+}
+
+/// One pair of a matrix in spring form (see [`Linearized::spring_form`]): B = u uᵀ + a I between
+/// coordinates `i` and `j`, pattern pair `pair`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringBlock<C> {
+    pub i: u32,
+    pub j: u32,
+    pub pair: u32,
+    pub u: C,
+    pub a: f64,
 }
 
 /// Block-sparse symmetric Jacobians: diagonal blocks, and one block per pattern pair (i, j), i < j,

@@ -8,7 +8,7 @@
 
 use crate::Coord;
 
-use super::Jacobians;
+use super::{Jacobians, SpringBlock};
 
 /// A = M − β_v D − β_x K: one diagonal block per coordinate and one block A_ij per pattern pair (i < j)
 /// (A_ji = A_ijᵀ), with the inverses of the diagonal blocks for block-Jacobi preconditioning.
@@ -18,8 +18,9 @@ pub(crate) struct SystemMatrix<C: Coord> {
     pub off: Vec<C::Block>,
     /// A_ii⁻¹ (or the inverse of its diagonal when A_ii is singular).
     pub jacobi: Vec<C::Block>,
-    /// The pairs in spring form (u_e, a_e), off_e = −(u_e u_eᵀ + a_e I), when `spring_form`.
-    pub springs: Vec<(C, f64)>,
+    /// The pairs of the matrix in spring form, off = −(u uᵀ + a I) (every other pattern pair zero),
+    /// when `spring_form`.
+    pub springs: Vec<SpringBlock<C>>,
     /// The masses of the diagonal, when `spring_form`.
     pub masses: Vec<f64>,
     /// Whether `springs` and `masses` describe the matrix: A = M + Σ_e B_e (e_i − e_j)(e_i − e_j)ᵀ
@@ -82,7 +83,7 @@ impl<C: Coord> SystemMatrix<C> {
             for i in 0..x.len() {
                 y[i] = x[i] * self.masses[i];
             }
-            for (&(i, j), &(u, a)) in pattern.iter().zip(&self.springs) {
+            for &SpringBlock { i, j, u, a, .. } in &self.springs {
                 let (i, j) = (i as usize, j as usize);
                 let d = x[i] - x[j];
                 let b = u * u.dot(d) + d * a;
