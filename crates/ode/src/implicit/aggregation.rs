@@ -601,9 +601,12 @@ mod tests {
 
     use super::*;
 
+    /// A system matrix, its pattern, masses, prescribed flags and positions.
+    type System = (SystemMatrix<DVec3>, Vec<(u32, u32)>, Vec<f64>, Vec<bool>, Vec<DVec3>);
+
     /// A spring-form matrix on a jittered 6 × 6 grid with row, column and skip-one springs and one
     /// prescribed corner, held both as blocks and as springs.
-    fn spring_system() -> (SystemMatrix<DVec3>, Vec<(u32, u32)>, Vec<f64>, Vec<bool>, Vec<DVec3>) {
+    fn spring_system() -> System {
         let n = 6;
         let id = |i: usize, j: usize| (j * n + i) as u32;
         let mut pattern = Vec::new();
