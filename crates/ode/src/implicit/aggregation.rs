@@ -84,6 +84,8 @@ pub(crate) struct RigidAggregation<C: Coord> {
     solver: Option<SparseSolver>,
     y: Vec<f64>,
     az: Vec<C>,
+    /// Per aggregate, Σ m x and Σ m (scratch of the levers).
+    centres: Vec<[f64; 4]>,
     /// Coarse factorisations so far.
     pub factorizations: usize,
 }
@@ -160,6 +162,7 @@ impl<C: Coord> RigidAggregation<C> {
             solver: None,
             y: Vec::new(),
             az: Vec::new(),
+            centres: Vec::new(),
             factorizations: 0,
         }
     }
@@ -316,7 +319,9 @@ impl<C: Coord> RigidAggregation<C> {
         let per = self.per;
         // Levers from the aggregates' mass centres.
         if per == MAX_PER {
-            let mut centre = vec![[0.0f64; 4]; self.n_agg];
+            let centre = &mut self.centres;
+            centre.clear();
+            centre.resize(self.n_agg, [0.0; 4]);
             for i in 0..n {
                 let g = self.agg[i];
                 if g != NONE {
