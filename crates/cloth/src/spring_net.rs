@@ -417,6 +417,9 @@ impl Linearized<DVec3> for SpringNetwork {
                 off[e] = DMat3::ZERO;
             }
             if l == 0.0 {
+                if let Some(list) = springs.as_deref_mut() {
+                    list.push(SpringBlock { i: s.i, j: s.j, u: DVec3::ZERO, a: 0.0 });
+                }
                 continue;
             }
             let n = d / l;
@@ -438,7 +441,7 @@ impl Linearized<DVec3> for SpringNetwork {
             diag[j] += block;
             if let Some(list) = springs.as_deref_mut() {
                 // B = u uᵀ + a I with u = n √along (along ≥ 0: 1 − g = L0/L and the damping ≥ 0).
-                list.push(SpringBlock { i: s.i, j: s.j, pair: e as u32, u: n * along.sqrt(), a: across });
+                list.push(SpringBlock { i: s.i, j: s.j, u: n * along.sqrt(), a: across });
             }
         }
     }

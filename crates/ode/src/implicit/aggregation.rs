@@ -98,29 +98,42 @@ fn skew(d: [f64; 3]) -> [[f64; 3]; 3] {
     [[0.0, d[2], -d[1]], [-d[2], 0.0, d[0]], [d[1], -d[0], 0.0]]
 }
 
-/// out += sign · Rᵢᵀ (u uᵀ + s I) R_j for Rᵢ = [S(lᵢ) | I] (rotations first): (Rᵢᵀu)(R_jᵀu)ᵀ plus
-/// s [[SᵢᵀS_j, Sᵢᵀ], [S_j, I]].
+/// Rᵀu = [S(l)ᵀ u; u] for R = [S(l) | I] (rotations first).
 #[inline]
-fn add_spring_galerkin(out: &mut Block6, li: [f64; 3], lj: [f64; 3], u: [f64; 3], s: f64, sign: f64) {
-    let (si, sj) = (skew(li), skew(lj));
-    let st_u = |m: &[[f64; 3]; 3]| -> [f64; 3] {
-        std::array::from_fn(|p| m[0][p] * u[0] + m[1][p] * u[1] + m[2][p] * u[2])
-    };
-    let (ri, rj) = (st_u(&si), st_u(&sj));
-    let vi = [ri[0], ri[1], ri[2], u[0], u[1], u[2]];
-    let vj = [rj[0], rj[1], rj[2], u[0], u[1], u[2]];
+fn modes_of(l: [f64; 3], u: [f64; 3]) -> [f64; MAX_PER] {
+    let s = skew(l);
+    let r: [f64; 3] = std::array::from_fn(|p| s[0][p] * u[0] + s[1][p] * u[1] + s[2][p] * u[2]);
+    [r[0], r[1], r[2], u[0], u[1], u[2]]
+}
+
+/// out += sign · Rᵢᵀ (u uᵀ + s I) R_j = sign · (vᵢ v_jᵀ + s [[SᵢᵀS_j, Sᵢᵀ], [S_j, I]]) with vᵢ = Rᵢᵀu
+/// ([`modes_of`]) and SᵢᵀS_j = (lᵢ·l_j) I − l_j lᵢᵀ.
+#[inline]
+fn add_galerkin(
+    out: &mut Block6,
+    li: [f64; 3],
+    lj: [f64; 3],
+    vi: &[f64; MAX_PER],
+    vj: &[f64; MAX_PER],
+    s: f64,
+    sign: f64,
+) {
     for p in 0..MAX_PER {
+        let a = sign * vi[p];
         for q in 0..MAX_PER {
-            out[p][q] += sign * vi[p] * vj[q];
+            out[p][q] += a * vj[q];
         }
     }
     let ss = sign * s;
+    let (si, sj) = (skew(li), skew(lj));
+    let dot = li[0] * lj[0] + li[1] * lj[1] + li[2] * lj[2];
     for p in 0..3 {
         for q in 0..3 {
-            out[p][q] += ss * (si[0][p] * sj[0][q] + si[1][p] * sj[1][q] + si[2][p] * sj[2][q]);
+            out[p][q] -= ss * lj[p] * li[q];
             out[p][q + 3] += ss * si[q][p];
             out[p + 3][q] += ss * sj[p][q];
         }
+        out[p][p] += ss * dot;
         out[p + 3][p + 3] += ss;
     }
 }
@@ -433,8 +446,8 @@ impl<C: Coord> RigidAggregation<C> {
                 }
             }
         }
-        for &super::SpringBlock { i, j, pair, u, a: s } in &a.springs {
-            let (i, j, e) = (i as usize, j as usize, pair as usize);
+        for (e, &super::SpringBlock { i, j, u, a: s }) in a.springs.iter().enumerate() {
+            let (i, j) = (i as usize, j as usize);
             let (gi, gj) = (self.agg[i], self.agg[j]);
             let u = comps(u);
             if per == 1 {
@@ -469,20 +482,23 @@ impl<C: Coord> RigidAggregation<C> {
                 }
                 continue;
             }
-            for (g, l) in [(gi, self.lever[i]), (gj, self.lever[j])] {
-                if g != NONE {
-                    add_spring_galerkin(&mut self.d_blocks[g as usize], l, l, u, s, 1.0);
-                }
+            // Rᵀu for each end, then Rᵢᵀ B Rᵢ and R_jᵀ B R_j on the diagonals and −Rᵢᵀ B R_j between.
+            let (li, lj) = (self.lever[i], self.lever[j]);
+            let (vi, vj) = (modes_of(li, u), modes_of(lj, u));
+            if gi != NONE {
+                add_galerkin(&mut self.d_blocks[gi as usize], li, li, &vi, &vi, s, 1.0);
+            }
+            if gj != NONE {
+                add_galerkin(&mut self.d_blocks[gj as usize], lj, lj, &vj, &vj, s, 1.0);
             }
             if gi != NONE && gj != NONE {
                 let o = &mut self.o_blocks[self.pair_of[e] as usize];
                 // The coarse pair is stored as (lower aggregate, higher aggregate).
-                let (la, lb) = if self.flip[e] {
-                    (self.lever[j], self.lever[i])
+                if self.flip[e] {
+                    add_galerkin(o, lj, li, &vj, &vi, s, -1.0);
                 } else {
-                    (self.lever[i], self.lever[j])
-                };
-                add_spring_galerkin(o, la, lb, u, s, -1.0);
+                    add_galerkin(o, li, lj, &vi, &vj, s, -1.0);
+                }
             }
         }
     }
@@ -641,7 +657,7 @@ mod tests {
         for (e, &(i, j)) in pattern.iter().enumerate() {
             let d = (x[j as usize] - x[i as usize]).normalize();
             let (u, s) = (d * (3.0 + wobble(e, 0.9)), 0.4 + 0.3 * wobble(e, 1.7));
-            a.springs.push(super::super::SpringBlock { i, j, pair: e as u32, u, a: s });
+            a.springs.push(super::super::SpringBlock { i, j, u, a: s });
             let b = DVec3::block_combine(DVec3::block_outer(u, u), 1.0, DVec3::block_identity(s), 1.0);
             a.off[e] = DVec3::block_combine(b, -1.0, b, 0.0);
             a.diag[i as usize] = DVec3::block_combine(a.diag[i as usize], 1.0, b, 1.0);

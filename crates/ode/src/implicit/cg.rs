@@ -99,22 +99,26 @@ pub(crate) fn pcg<C: Coord>(
         x.fill(C::default());
         return CgOutcome { iterations: 0, relative_residual: 0.0, converged: true };
     }
-    // r = b − A x₀
-    a.mul(pattern, filter, x, &mut buf.q);
-    for i in 0..n {
-        buf.r[i] = b[i] - buf.q[i];
+    // r = b − A x₀ (no product when x₀ = 0, the implicit steps' start: r = b to the bit).
+    if x.iter().all(|c| c.max_abs() == 0.0) {
+        buf.r.copy_from_slice(b);
+    } else {
+        a.mul(pattern, filter, x, &mut buf.q);
+        for i in 0..n {
+            buf.r[i] = b[i] - buf.q[i];
+        }
     }
-    precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
-    buf.p.copy_from_slice(&buf.z);
-    let mut rz = dot(&buf.r, &buf.z);
     // A residual at the bottom of the floating-point range counts as solved: tol²‖b‖² underflows to zero
     // there (a motion that has decayed to nothing over thousands of steps), and p·Ap with it.
     let target = (tol * tol * b_norm2).max(f64::MIN_POSITIVE);
     let mut r2 = dot(&buf.r, &buf.r);
+    if r2 <= target {
+        return CgOutcome { iterations: 0, relative_residual: (r2 / b_norm2).sqrt(), converged: true };
+    }
+    precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
+    buf.p.copy_from_slice(&buf.z);
+    let mut rz = dot(&buf.r, &buf.z);
     for it in 0..max_iter {
-        if r2 <= target {
-            return CgOutcome { iterations: it, relative_residual: (r2 / b_norm2).sqrt(), converged: true };
-        }
         a.mul(pattern, filter, &buf.p, &mut buf.q);
         let pq = dot(&buf.p, &buf.q);
         if pq.is_nan() || pq <= 0.0 {
@@ -125,6 +129,16 @@ pub(crate) fn pcg<C: Coord>(
             x[i] += buf.p[i] * alpha;
             buf.r[i] = buf.r[i] - buf.q[i] * alpha;
         }
+        // Converged: the preconditioner (its products with A) is not applied to a residual no
+        // iteration will use.
+        r2 = dot(&buf.r, &buf.r);
+        if r2 <= target {
+            return CgOutcome {
+                iterations: it + 1,
+                relative_residual: (r2 / b_norm2).sqrt(),
+                converged: true,
+            };
+        }
         precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
         let rz_new = dot(&buf.r, &buf.z);
         let beta = rz_new / rz;
@@ -132,7 +146,6 @@ pub(crate) fn pcg<C: Coord>(
         for i in 0..n {
             buf.p[i] = buf.z[i] + buf.p[i] * beta;
         }
-        r2 = dot(&buf.r, &buf.r);
     }
     CgOutcome { iterations: max_iter, relative_residual: (r2 / b_norm2).sqrt(), converged: r2 <= target }
 }

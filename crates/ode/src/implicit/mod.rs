@@ -77,9 +77,9 @@ pub trait Linearized<C: Coord> {
     /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass: `diag`
     /// gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off` gets −β_v D_ij − β_x K_ij on
     /// the pattern; a system in [`Linearized::spring_form`] is passed `springs` and replaces its
-    /// contents with the pairs of the matrix in spring form (off_e = −(u uᵀ + a I) for each, the other
-    /// pattern pairs zero, and `diag` the sum of their B exactly), and is passed an empty `off` when
-    /// the solver needs no blocks. The implicit steps call this once per Newton iteration; the
+    /// contents with one block per pattern pair, in the pattern's order (off_e = −(u uᵀ + a I), and
+    /// `diag` the sum of their B exactly), and is passed an empty `off` when the solver needs no
+    /// blocks. The implicit steps call this once per Newton iteration; the
     /// default goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` as
     /// it is, and a system whose Jacobians are sums over pairs can override it to skip the four
     /// intermediate block arrays.
@@ -111,12 +111,11 @@ pub trait Linearized<C: Coord> {
 }
 
 /// One pair of a matrix in spring form (see [`Linearized::spring_form`]): B = u uᵀ + a I between
-/// coordinates `i` and `j`, pattern pair `pair`.
+/// coordinates `i` and `j`. 40 bytes for `DVec3`: the product with the matrix streams these.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpringBlock<C> {
     pub i: u32,
     pub j: u32,
-    pub pair: u32,
     pub u: C,
     pub a: f64,
 }

@@ -18,8 +18,7 @@ pub(crate) struct SystemMatrix<C: Coord> {
     pub off: Vec<C::Block>,
     /// A_ii⁻¹ (or the inverse of its diagonal when A_ii is singular).
     pub jacobi: Vec<C::Block>,
-    /// The pairs of the matrix in spring form, off = −(u uᵀ + a I) (every other pattern pair zero),
-    /// when `spring_form`.
+    /// The pattern's pairs in spring form, off_e = −(u uᵀ + a I), when `spring_form`.
     pub springs: Vec<SpringBlock<C>>,
     /// The masses of the diagonal, when `spring_form`.
     pub masses: Vec<f64>,
@@ -83,7 +82,7 @@ impl<C: Coord> SystemMatrix<C> {
             for i in 0..x.len() {
                 y[i] = x[i] * self.masses[i];
             }
-            for &SpringBlock { i, j, u, a, .. } in &self.springs {
+            for &SpringBlock { i, j, u, a } in &self.springs {
                 let (i, j) = (i as usize, j as usize);
                 let d = x[i] - x[j];
                 let b = u * u.dot(d) + d * a;
