@@ -187,6 +187,11 @@ impl SpringNetwork {
             stencil.add_forces(x, v, f, self.parallel);
             return;
         }
+        self.add_forces_by_spring(x, v, f);
+    }
+
+    /// The springs' forces added spring by spring, in their order.
+    fn add_forces_by_spring(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
         for s in &self.springs {
             let (i, j) = (s.i as usize, s.j as usize);
             let d = x[j] - x[i];
@@ -194,8 +199,7 @@ impl SpringNetwork {
             if l == 0.0 {
                 continue;
             }
-            let n = d / l;
-            let fs = n * (s.stiffness * (l - s.rest_length) + s.damping * (v[j] - v[i]).dot(n));
+            let fs = spring_pull(s, d / l, l, v[i], v[j]);
             f[i] += fs;
             f[j] -= fs;
         }
@@ -457,17 +461,7 @@ impl Linearized<DVec3> for SpringNetwork {
         for (fi, m) in f.iter_mut().zip(&self.masses) {
             *fi = self.gravity * *m;
         }
-        for s in &self.springs {
-            let (i, j) = (s.i as usize, s.j as usize);
-            let d = x[j] - x[i];
-            let l = d.length();
-            if l == 0.0 {
-                continue;
-            }
-            let fs = spring_pull(s, d / l, l, v[i], v[j]);
-            f[i] += fs;
-            f[j] -= fs;
-        }
+        self.add_forces_by_spring(x, v, f);
     }
 
     fn prescribed(&self) -> &[bool] {

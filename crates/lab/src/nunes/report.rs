@@ -168,29 +168,8 @@ fn walk(repo: &Repo) -> Result<String> {
             if e.accepted { "yes" } else { "" }
         );
     }
-    s.push_str("\n| quantity | thesis (Nunes 2006) | anima |\n|---|---|---|\n");
-    let _ = writeln!(
-        s,
-        "| fitness before optimisation (p = 0.25) | 0.000 (falls) | {:.3} ({}) |",
-        before.fitness(),
-        if before.fell { format!("falls after {} iterations", before.iterations) } else { "walks".into() }
-    );
-    let _ = writeln!(s, "| fitness after 45 evaluations (m in 50 s) | 10.528 | {:.3} |", after.fitness());
-    let _ = writeln!(s, "| mean speed over 50 s (m/s) | 0.21 | {:.2} |", after.distance / 50.0);
-    let _ = writeln!(
-        s,
-        "| distance before falling, long run (m) | 45.147 | {:.1}{} |",
-        long.distance,
-        if long.fell {
-            format!(" (falls after {} iterations)", long.iterations)
-        } else {
-            format!(
-                " (still walking after {} iterations = {:.0} s)",
-                long.iterations,
-                long.iterations as f64 * nunes::DT
-            )
-        }
-    );
+    s.push('\n');
+    table_6_3(&mut s, "anima", &before, &after, &long);
     let _ = writeln!(s, "| evaluations | 45 (+ initial) | {} |", log.len() - 1);
     let accepted: Vec<String> = log
         .evaluations
@@ -313,7 +292,42 @@ fn walk_protected() -> Result<String> {
     Ok(s)
 }
 
-/// The optimised walker of [`walk_faithful`], for the humanoid of [`nunes::faithful_character`].
+/// Table 6.3 beside one of anima's walkers: the fitness before the search, after it, the mean speed
+/// and the long run (a row per quantity, the header included).
+fn table_6_3(
+    s: &mut String,
+    column: &str,
+    before: &nunes::WalkOutcome,
+    after: &nunes::WalkOutcome,
+    long: &nunes::WalkOutcome,
+) {
+    let _ = writeln!(s, "| quantity | thesis (Nunes 2006) | {column} |\n|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| fitness before optimisation (p = 0.25) | 0.000 (falls) | {:.3} ({}) |",
+        before.fitness(),
+        if before.fell { format!("falls after {} iterations", before.iterations) } else { "walks".into() }
+    );
+    let _ = writeln!(s, "| fitness after 45 evaluations (m in 50 s) | 10.528 | {:.3} |", after.fitness());
+    let _ = writeln!(s, "| mean speed over 50 s (m/s) | 0.21 | {:.2} |", after.distance / 50.0);
+    let _ = writeln!(
+        s,
+        "| distance before falling, long run (m) | 45.147 | {:.1}{} |",
+        long.distance,
+        if long.fell {
+            format!(" (falls after {} iterations)", long.iterations)
+        } else {
+            format!(
+                " (still walking after {} iterations = {:.0} s)",
+                long.iterations,
+                long.iterations as f64 * nunes::DT
+            )
+        }
+    );
+}
+
+/// The walker the thesis's search finds on the humanoid of [`nunes::faithful_character`] (`reproduce
+/// nunes-walk`).
 pub const FAITHFUL_OPTIMISED: &str = "walk-faithful-optimised";
 
 /// A walk of `iterations` on the humanoid of [`nunes::faithful_character`] (no stop test when `long`).
@@ -371,29 +385,7 @@ fn walk_faithful(repo: &Repo) -> Result<String> {
          it. The winner is `assets/controllers/{FAITHFUL_OPTIMISED}.ron`.\n",
         nunes::FAITHFUL_GAIN
     );
-    s.push_str("| quantity | thesis (Nunes 2006) | anima, gains × 27 |\n|---|---|---|\n");
-    let _ = writeln!(
-        s,
-        "| fitness before optimisation (p = 0.25) | 0.000 (falls) | {:.3} ({}) |",
-        before.fitness(),
-        if before.fell { format!("falls after {} iterations", before.iterations) } else { "walks".into() }
-    );
-    let _ = writeln!(s, "| fitness after 45 evaluations (m in 50 s) | 10.528 | {:.3} |", after.fitness());
-    let _ = writeln!(s, "| mean speed over 50 s (m/s) | 0.21 | {:.2} |", after.distance / 50.0);
-    let _ = writeln!(
-        s,
-        "| distance before falling, long run (m) | 45.147 | {:.1}{} |",
-        long.distance,
-        if long.fell {
-            format!(" (falls after {} iterations)", long.iterations)
-        } else {
-            format!(
-                " (still walking after {} iterations = {:.0} s)",
-                long.iterations,
-                long.iterations as f64 * nunes::DT
-            )
-        }
-    );
+    table_6_3(&mut s, "anima, gains × 27", &before, &after, &long);
     let first_walker = log.evaluations.iter().position(|e| e.fitness > 0.0);
     let _ = writeln!(
         s,
