@@ -262,6 +262,10 @@ struct RunArgs {
     /// reports the RMS distance to it.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// Sheet scenes: evaluate the spring forces on one thread. By default a sheet of 65 536 particles
+    /// (256 × 256) or more uses every core, with the same results to the bit.
+    #[arg(long)]
+    one_thread: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -387,6 +391,7 @@ impl RunArgs {
             export: self.export.map(|e| match e {
                 ExportArg::Gltf => Export::Gltf,
             }),
+            parallel: !self.one_thread,
         })
     }
 }

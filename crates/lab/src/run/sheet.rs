@@ -26,6 +26,8 @@ pub struct SheetDetail {
     pub particles: usize,
     pub springs: usize,
     pub ns_per_particle_step: f64,
+    /// Threads the spring forces were evaluated on ([`RunOptions::parallel`]).
+    pub threads: usize,
     /// Mass-weighted centre of the particles at the end, m.
     pub center_of_mass: [f64; 3],
     /// RMS particle distance to the reference, m (with `--reference`).
@@ -49,7 +51,9 @@ pub fn run(
     {
         bail!("the reference has {} vertices, the sheet {n} particles", r.len());
     }
-    let net = scene.sheet.build();
+    let mut net = scene.sheet.build();
+    net.parallel = opts.parallel && n >= super::PARALLEL_MIN_PARTICLES;
+    let threads = if net.parallel { rayon::current_num_threads() } else { 1 };
     let n_springs = net.springs().len();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
@@ -175,6 +179,7 @@ pub fn run(
             particles: n,
             springs: n_springs,
             ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * n) as f64,
+            threads,
             center_of_mass: sim.network.centre_of_mass(x).to_array(),
             rms_to_reference: opts.reference.as_ref().map(|r| {
                 (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()
