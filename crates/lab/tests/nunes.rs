@@ -137,6 +137,19 @@ fn the_protective_machines_keep_the_head_off_the_ground_in_a_forward_fall() {
 }
 
 #[test]
+fn a_push_on_the_torso_at_the_centre_of_mass_height_acts() {
+    // SIMBICON's push (0.2 s on the torso, nunes-robustness.md): the thesis's walker takes 30 N·s
+    // forward and falls under 200.
+    let c = nunes::controller("walk-optimised").unwrap();
+    let rules = WalkRules { window: 0, ..WalkRules::default() };
+    let run = |impulse: f64| {
+        nunes::walk(c.clone(), 600, &rules, &[nunes::Push::torso(impulse, 400, 4)], |_| ()).unwrap()
+    };
+    assert!(!run(30.0).fell);
+    assert!(run(200.0).fell);
+}
+
+#[test]
 fn the_protected_walker_walks_as_walk_ron_until_it_falls() {
     // walk-protected.ron is walk.ron plus two sensory machines that stay idle while it walks.
     let run = |name: &str| {

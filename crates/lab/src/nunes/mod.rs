@@ -91,20 +91,37 @@ pub fn parse(text: &str) -> Result<Controller, CharacterError> {
     Ok(Controller::from_ron(text, &procedures())?)
 }
 
-/// A push on a body during a walk (spec §8.1.6, Fig. 6.8): `force` N applied to the head for
-/// `duration` iterations from iteration `at`.
+/// A push on a body during a walk (spec §8.1.6, Fig. 6.8): `force` N applied for `duration`
+/// iterations from iteration `at`, on the head (the thesis's pushes) or on the torso at the height of
+/// the centre of mass (SIMBICON's).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Push {
     pub at: u64,
     pub duration: u64,
     pub force: [f64; 2],
+    pub target: PushTarget,
+}
+
+/// Where a [`Push`] is applied.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PushTarget {
+    /// The head's centre.
+    Head,
+    /// The abdomen, at the height of the whole body's centre of mass (Yin et al. 2007 push the torso
+    /// there, so the push moves the body without turning it).
+    TorsoAtCom,
 }
 
 impl Push {
-    /// A horizontal push of `impulse` N·s (positive forward, along +x) spread evenly over
+    /// A horizontal push of `impulse` N·s (positive forward, along +x) on the head, spread evenly over
     /// `duration` iterations from iteration `at`.
     pub fn impulse(impulse: f64, at: u64, duration: u64) -> Self {
-        Self { at, duration, force: [impulse / (duration as f64 * DT), 0.0] }
+        Self { at, duration, force: [impulse / (duration as f64 * DT), 0.0], target: PushTarget::Head }
+    }
+
+    /// The same push on the torso at the height of the centre of mass.
+    pub fn torso(impulse: f64, at: u64, duration: u64) -> Self {
+        Self { target: PushTarget::TorsoAtCom, ..Self::impulse(impulse, at, duration) }
     }
 }
 
@@ -210,14 +227,19 @@ pub fn apply_pushes(c: &mut Character, pushes: &[Push], k: u64) -> Result<(), Ch
     if pushes.is_empty() {
         return Ok(());
     }
-    let head = c.env.world.skeleton(0)?.body_index("head");
+    let skeleton = c.env.world.skeleton(0)?;
+    let (head, torso) = (skeleton.body_index("head"), skeleton.body_index("abdomen"));
     for p in pushes {
-        if k >= p.at
-            && k < p.at + p.duration
-            && let Some(h) = head
-        {
-            let at = c.env.sensors[0].body_position[h];
-            c.env.world.apply_force(0, h, p.force, at)?;
+        if !(k >= p.at && k < p.at + p.duration) {
+            continue;
+        }
+        let s = &c.env.sensors[0];
+        let hit = match p.target {
+            PushTarget::Head => head.map(|h| (h, s.body_position[h])),
+            PushTarget::TorsoAtCom => torso.map(|t| (t, [s.body_position[t][0], s.com[1]])),
+        };
+        if let Some((body, at)) = hit {
+            c.env.world.apply_force(0, body, p.force, at)?;
         }
     }
     Ok(())
