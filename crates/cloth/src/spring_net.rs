@@ -370,7 +370,6 @@ pub fn spring_stiffness_block(n: DVec3, l: f64, k: f64, rest_length: f64, defini
     nn * k + (DMat3::IDENTITY - nn) * (k * geometric)
 }
 
-/// Exact Jacobians of the damped springs (Baraff & Witkin 1998):
 /// The force of spring `s` on its first end, along its unit direction `n` (first end to second) at
 /// length `l`: (k (l − L0) + c (v_j − v_i)·n) n.
 #[inline]
@@ -378,6 +377,7 @@ fn spring_pull(s: &Spring, n: DVec3, l: f64, vi: DVec3, vj: DVec3) -> DVec3 {
     n * (s.stiffness * (l - s.rest_length) + s.damping * (vj - vi).dot(n))
 }
 
+/// Exact Jacobians of the damped springs (Baraff & Witkin 1998):
 /// ∂f_i/∂x_j = k [n nᵀ + (1 − L0/L)(I − n nᵀ)] (the geometric term clamped at 0 when `definite_jacobians`),
 /// ∂f_i/∂v_j = c n nᵀ, and ∂f_i/∂x_i, ∂f_i/∂v_i their negatives. The damping force's dependence on n
 /// through x is left out, as is usual: it is small and not symmetric.

@@ -119,8 +119,8 @@ fn head_push(name: &str, impulse: f64) -> (bool, bool) {
     let (mut head_down, mut protected) = (false, false);
     let c = nunes::controller(name).unwrap();
     nunes::walk(c, 260, &rules, &[push], |c| {
-        let head = c.env.world.skeleton(0).unwrap().body_index("head").unwrap();
-        head_down |= c.env.sensors[0].on_ground[head];
+        let s = &c.env.sensors[0];
+        head_down |= s.layout.head.is_some_and(|h| s.on_ground[h]);
         protected |=
             c.controller.machines().iter().any(|m| m.name() == "PROTECT-FWD" && m.current_state().is_some());
     })

@@ -1,7 +1,7 @@
 //! `cargo xtask figures` for Nunes 2006: strobe pictures of the walker before and after optimisation
 //! (Fig. 6.7), the throw (Fig. 6.12) and the assisted backflip (Fig. 6.17), the robust and SIMBICON
-//! walkers under pushes, variant C's protective machines under head pushes (Figs. 4.7, 6.9), and the best fitness against evaluations of every optimiser on the walking and
-//! throwing objectives.
+//! walkers under pushes, variant C's protective machines under head pushes (Figs. 4.7, 6.9), and the
+//! best fitness against evaluations of every optimiser on the walking and throwing objectives.
 //!
 //! A strobe picture overlays the figure every few control iterations, older frames faded towards the
 //! sky, in the thesis's side view (x forward, y up).

@@ -227,16 +227,14 @@ pub fn apply_pushes(c: &mut Character, pushes: &[Push], k: u64) -> Result<(), Ch
     if pushes.is_empty() {
         return Ok(());
     }
-    let skeleton = c.env.world.skeleton(0)?;
-    let (head, torso) = (skeleton.body_index("head"), skeleton.body_index("abdomen"));
     for p in pushes {
         if !(k >= p.at && k < p.at + p.duration) {
             continue;
         }
         let s = &c.env.sensors[0];
         let hit = match p.target {
-            PushTarget::Head => head.map(|h| (h, s.body_position[h])),
-            PushTarget::TorsoAtCom => torso.map(|t| (t, [s.body_position[t][0], s.com[1]])),
+            PushTarget::Head => s.layout.head.map(|h| (h, s.body_position[h])),
+            PushTarget::TorsoAtCom => s.layout.abdomen.map(|t| (t, [s.body_position[t][0], s.com[1]])),
         };
         if let Some((body, at)) = hit {
             c.env.world.apply_force(0, body, p.force, at)?;

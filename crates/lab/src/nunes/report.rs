@@ -222,12 +222,12 @@ fn pushed_walk(controller: Controller, impulse: f64) -> Result<Fall> {
             protected = Some((m.name().to_string(), after));
         }
         let Ok(sk) = c.env.world.skeleton(0) else { return };
-        for (b, &on) in c.env.sensors[0].on_ground.iter().enumerate() {
-            let body = sk.body(b);
-            if on && !body.name.starts_with("foot") {
-                head_down |= body.name == "head";
+        let s = &c.env.sensors[0];
+        for (b, &on) in s.on_ground.iter().enumerate() {
+            if on && !s.layout.feet.contains(&Some(b)) {
+                head_down |= s.layout.head == Some(b);
                 if first_down.is_none() {
-                    first_down = Some((body.name.clone(), after));
+                    first_down = Some((sk.body(b).name.clone(), after));
                 }
             }
         }
@@ -484,7 +484,8 @@ fn throw(repo: &Repo) -> Result<String> {
         c.apply(&ids, x);
         Ok(nunes::throw(c, &nunes::BASKET, 2000, |_| ())?)
     };
-    let (before, after) = (outcome(&x0)?, outcome(&best.x)?);
+    let before = outcome(&x0)?;
+    let (after, after_release) = throw_with_release(base, &ids, &best.x)?;
     let mut winner = base.clone();
     winner.apply(&ids, &best.x);
     repo.write_text(
@@ -527,7 +528,7 @@ fn throw(repo: &Repo) -> Result<String> {
         s,
         "| ball through the hoop after | yes (overhand) | {} ({}; see the all-global search below for how it is told) |",
         if after.scored { "yes" } else { "no" },
-        throw_with_release(base, &ids, &best.x)?.1.map_or("no release", |r| r.style())
+        after_release.map_or("no release", |r| r.style())
     );
     let _ =
         writeln!(s, "| ball through the hoop before | no | {} |", if before.scored { "yes" } else { "no" });

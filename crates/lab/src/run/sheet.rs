@@ -26,7 +26,8 @@ pub struct SheetDetail {
     pub particles: usize,
     pub springs: usize,
     pub ns_per_particle_step: f64,
-    /// Threads the spring forces were evaluated on ([`RunOptions::parallel`]).
+    /// Threads the spring forces were evaluated on ([`RunOptions::parallel`]; 1 for the implicit
+    /// integrators).
     pub threads: usize,
     /// Mass-weighted centre of the particles at the end, m.
     pub center_of_mass: [f64; 3],
@@ -52,7 +53,8 @@ pub fn run(
         bail!("the reference has {} vertices, the sheet {n} particles", r.len());
     }
     let mut net = scene.sheet.build();
-    net.parallel = opts.parallel && n >= super::PARALLEL_MIN_PARTICLES;
+    // The implicit steps evaluate their forces with the system, spring by spring, on one thread.
+    net.parallel = opts.parallel && n >= super::PARALLEL_MIN_PARTICLES && !scene.integrator.is_implicit();
     let threads = if net.parallel { rayon::current_num_threads() } else { 1 };
     let n_springs = net.springs().len();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);

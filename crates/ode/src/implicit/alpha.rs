@@ -60,8 +60,8 @@ pub const DEFAULT_RHO_INF: f64 = 0.2;
 /// (rigid-aggregation CG to a relative residual of 0.1 per iteration; `cargo run --release -p
 /// anima-cloth --example large_steps -- probe`, with `NEWTON=k`, before the spring-form matrix): 2
 /// iterations err 6.5 mm at the centre of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms
-/// per step, 3 iterations 13 mm (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very stiff sheet of the hard
-/// cases (k = 10⁵ N/m, `implicit_hard_cases`): its largest strain reaches 11.6 % with two (7.8 % with
+/// per step, 3 iterations 13 mm (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very
+/// stiff sheet of the hard cases (k = 10⁵ N/m, `implicit_hard_cases`): its largest strain reaches 11.6 % with two (7.8 % with
 /// three; a looser relative residual of 0.2 with three let it swing up to 23 m/s). With exact solves
 /// one iteration, linearised at the predicted state, errs 490 mm and two 12 mm (ρ∞ = 0.4). The centre
 /// of mass of a folding sheet moves chaotically with small changes: the RMS error is the steadier
@@ -106,8 +106,8 @@ impl AlphaParameters {
 /// Newton iterations before the contraction test may end them ([`DEFAULT_NEWTON_CONTRACTION`]).
 const MIN_NEWTON_ITERATIONS: usize = 2;
 
-/// The planned Newton iterations stop early, after at least two, once an update
-/// is at most this fraction of the one before it in the mass norm (‖δ_k‖_M ≤ θ ‖δ_{k−1}‖_M: the
+/// The planned Newton iterations stop early, after at least two, once an update is at most this
+/// fraction of the one before it in the mass norm (‖δ_k‖_M ≤ θ ‖δ_{k−1}‖_M: the
 /// iterate is then near where Newton's method is going, and the next update would be smaller still).
 /// Measured at 1/60 s with three planned iterations: on the standard sheet (N = 64) ‖δ₂‖/‖δ₁‖ has a
 /// median of 0.17 and exceeds 0.3 in 5 of 60 steps; on the very stiff sheet of the hard cases

@@ -216,9 +216,7 @@ impl LinearSolver {
             LinearSolver::RigidAggregation { .. } => "aggregation",
         }
     }
-}
 
-impl LinearSolver {
     /// Whether the solver reads the matrix's blocks (a factorisation or a preconditioner built from
     /// them), or only multiplies by the matrix and inverts its diagonal blocks.
     pub(crate) fn needs_blocks(&self) -> bool {
