@@ -46,4 +46,5 @@ pub mod flex3d;
 pub mod network_sim;
 pub mod oliveira;
 pub mod self_collision;
+mod sheet_stencil;
 pub mod spring_net;

@@ -275,10 +275,14 @@ struct Colliders {
 /// test are those of a grid rebuilt at every step.
 ///
 /// `clearance[p]` is a lower bound, valid for as long as the grid is, on the distance from `anchor[p]`
-/// to every triangle that does not contain p (surfaces at their current positions, static objects): at
-/// most `reach`, and for the triangles within reach their distance at the anchor positions less
-/// √3·`margin`, the farthest any of their points can have moved. A path that stays within the
-/// clearance of its particle's anchor cannot meet a triangle, and is not tested. Skipping only tests
+/// to every surface triangle that does not contain p, at its current position: at most `reach`, and
+/// for the triangles within reach their distance at the anchor positions less √3·`margin`, the farthest
+/// any of their points can have moved. `static_clearance[p]` is the same for the static objects' triangles,
+/// which do not move. A path that stays within the clearance of its particle's anchor cannot meet a
+/// surface triangle, and is not tested against the surfaces; one within the static clearance is not
+/// tested against the static objects. The two are kept apart because a cloth resting on a table is
+/// within a hair of the table but far from its own triangles: its paths are tested against the table
+/// only. Skipping only tests
 /// that cannot hit, and never changing the candidates of the others, the pass gives the results of the
 /// brute force, to the bit (checked by the tests below and by `docs/reproduction/flex3d-results.md`).
 #[derive(Debug, Clone, Default)]
@@ -288,15 +292,18 @@ struct SurfaceBins {
     margin: f64,
     reach: f64,
     clearance: Vec<f64>,
+    static_clearance: Vec<f64>,
     grown: Vec<Aabb>,
     /// Surface triangles prepared at this pass's positions: `prepared[t]` is valid when
     /// `prepared_in[t] == pass`.
     prepared: Vec<PreparedTriangle>,
     prepared_in: Vec<u64>,
     pass: u64,
-    /// Grid rebuilds, and paths left untested for being within their clearance, so far.
+    /// Grid rebuilds, paths left untested for being within both clearances, and paths tested against
+    /// the static objects only, so far.
     rebuilds: u64,
     skipped: u64,
+    static_only: u64,
 }
 
 /// A triangle's box grows by this fraction of the surfaces' mean triangle extent when binned. With 0.1
@@ -357,19 +364,30 @@ impl SurfaceBins {
         let room = 3f64.sqrt() * self.margin;
         self.clearance.clear();
         self.clearance.resize(x.len(), 0.0);
+        self.static_clearance.clear();
+        self.static_clearance.resize(x.len(), 0.0);
+        // A little less, so that round-off in the distances cannot let a path through.
+        let shrink = |c: f64| c * (1.0 - 1e-9) - 1e-12;
         for (p, &a) in x.iter().enumerate() {
             let around = Aabb { min: a - DVec3::splat(self.reach), max: a + DVec3::splat(self.reach) };
+            // A triangle's box is never farther than the triangle: one whose box is already beyond the
+            // clearance found so far cannot lower it, and its exact distance is not computed.
             let mut c = self.reach;
             self.grid.query(&around, |t| {
-                if !corners[t].contains(&(p as u32)) {
+                if !corners[t].contains(&(p as u32)) && boxes[t].distance_to(a) - room < c {
                     let tri = corners[t].map(|i| x[i as usize]);
                     c = c.min(point_triangle_proximity(a, tri).distance - room);
                 }
             });
-            static_grid
-                .query(&around, |t| c = c.min(point_triangle_proximity(a, static_corners[t]).distance));
-            // A little less, so that round-off in the distances cannot let a path through.
-            self.clearance[p] = c * (1.0 - 1e-9) - 1e-12;
+            self.clearance[p] = shrink(c);
+            let mut c = self.reach;
+            static_grid.query(&around, |t| {
+                let tri = static_corners[t];
+                if Aabb::from_points(tri).distance_to(a) < c {
+                    c = c.min(point_triangle_proximity(a, tri).distance);
+                }
+            });
+            self.static_clearance[p] = shrink(c);
         }
     }
 }
@@ -777,7 +795,16 @@ impl Flex3dWorld {
             surface_bins.begin(&boxes[n_static..], &corners[n_static..], x, static_grid, static_corners);
         }
         let SurfaceBins {
-            grid: surface_grid, prepared, prepared_in, pass, anchor, clearance, skipped, ..
+            grid: surface_grid,
+            prepared,
+            prepared_in,
+            pass,
+            anchor,
+            clearance,
+            static_clearance,
+            skipped,
+            static_only,
+            ..
         } = surface_bins;
         let pass = *pass;
         let pinned = &model.pinned;
@@ -790,11 +817,22 @@ impl Flex3dWorld {
             if dir == DVec3::ZERO {
                 continue;
             }
-            // A path within its particle's clearance cannot meet a triangle (see `SurfaceBins`; the
+            // A path within its particle's clearances cannot meet a triangle (see `SurfaceBins`; the
             // clearances are kept only while the surfaces are tested).
-            if surfaces && !brute_force && o.distance(anchor[p]) + dir.length() < clearance[p] {
-                *skipped += 1;
-                continue;
+            let (mut test_static, mut test_surfaces) = (static_objects && n_static > 0, surfaces);
+            if surfaces && !brute_force {
+                // (A non-finite reach is within no clearance: such a path is tested.)
+                let reach = o.distance(anchor[p]) + dir.length();
+                let within = |c: f64| reach < c;
+                test_surfaces = !within(clearance[p]);
+                test_static &= !within(static_clearance[p]);
+                if !test_surfaces {
+                    if !test_static {
+                        *skipped += 1;
+                        continue;
+                    }
+                    *static_only += 1;
+                }
             }
             let seg = Aabb::from_points([o, x_new[p]]);
             let mut best: Option<(f64, usize, [f64; 3])> = None;
@@ -828,10 +866,10 @@ impl Flex3dWorld {
                 let first = if static_objects { 0 } else { n_static };
                 (first..last).for_each(&mut test);
             } else {
-                if n_static > 0 && static_objects {
+                if test_static {
                     static_grid.query(&seg, &mut test);
                 }
-                if surfaces {
+                if test_surfaces {
                     surface_grid.query(&seg, |t| test(t + n_static));
                 }
             }
@@ -1059,6 +1097,7 @@ mod tests {
         let bins = &grid.colliders.surface_bins;
         assert!(bins.rebuilds < scene.n_steps() as u64 / 2, "{} rebuilds", bins.rebuilds);
         assert!(bins.skipped > 0, "no path was skipped");
+        assert!(bins.static_only > 0, "no path was tested against the box alone");
     }
 
     #[test]
