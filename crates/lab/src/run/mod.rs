@@ -43,9 +43,10 @@ pub struct RunOptions {
     pub reference: Option<Vec<DVec3>>,
     /// An animation of the whole run to write at its end (`animation.glb` for glTF), beside the frames.
     pub export: Option<Export>,
-    /// Sheet scenes: evaluate the spring forces of the explicit integrators on every core when the sheet
-    /// has at least [`PARALLEL_MIN_PARTICLES`] particles (the `anima` binary's default; `--one-thread`
-    /// turns it off). The results are the same to the bit as on one thread.
+    /// Sheet scenes: run the explicit integrators on every core when the sheet has at least
+    /// [`PARALLEL_MIN_PARTICLES`] particles, or [`PARALLEL_MIN_PARTICLES_FUSED`] for symplectic Euler
+    /// (the `anima` binary's default; `--one-thread` turns it off). The results are the same to the bit
+    /// as on one thread.
     pub parallel: bool,
 }
 
@@ -56,6 +57,22 @@ pub struct RunOptions {
 /// N = 128 0.75–0.85 s against 0.59–0.61 s, and N = 256 (65 536 particles) 2.50–2.62 s against
 /// 2.97–3.00 s, the first size where the second core pays.
 pub const PARALLEL_MIN_PARTICLES: usize = 65_536;
+
+/// Sheets stepped with symplectic Euler run on every core from this size: that run is fused and keeps
+/// its threads between steps, with a spin barrier between its two phases, so the second core pays much
+/// earlier. Measured on the 2-core machine, alternating, three runs each (`anima run` loop times): the
+/// standard sheet N = 32 (1 024 particles) at 2·10⁻⁴ s took 0.13–0.14 s on two threads against
+/// 0.17–0.19 s on one, N = 64 at 10⁻⁴ s 0.71–0.73 s against 1.12–1.13 s.
+pub const PARALLEL_MIN_PARTICLES_FUSED: usize = 1_024;
+
+/// The size from which a sheet stepped with `integrator` runs on every core.
+pub fn parallel_min_particles(integrator: Integrator) -> usize {
+    if integrator == Integrator::SymplecticEuler {
+        PARALLEL_MIN_PARTICLES_FUSED
+    } else {
+        PARALLEL_MIN_PARTICLES
+    }
+}
 
 impl RunOptions {
     /// Nothing written: for tests and experiments that only want the numbers.

@@ -54,7 +54,9 @@ pub fn run(
     }
     let mut net = scene.sheet.build();
     // The implicit steps evaluate their forces with the system, spring by spring, on one thread.
-    net.parallel = opts.parallel && n >= super::PARALLEL_MIN_PARTICLES && !scene.integrator.is_implicit();
+    net.parallel = opts.parallel
+        && n >= super::parallel_min_particles(scene.integrator)
+        && !scene.integrator.is_implicit();
     let threads = if net.parallel { rayon::current_num_threads() } else { 1 };
     let n_springs = net.springs().len();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
