@@ -395,7 +395,7 @@ fn for_each_chunk<T: Send>(
 /// (measured: threads started per 1/30 s frame made two threads slower than one on the 32 × 32 sheet).
 #[cfg(feature = "parallel")]
 mod banded {
-    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::mpsc::{Receiver, Sender, channel};
     use std::sync::{Arc, Mutex, RwLock, RwLockReadGuard};
     use std::thread::JoinHandle;
@@ -616,6 +616,9 @@ mod banded {
     impl Shared {
         /// Band b's part of a run.
         fn worker(&self, b: usize, job: Job) {
+            // A panic here would leave the other threads waiting at a barrier for ever: it poisons the
+            // barrier, and they panic in turn (the caller's thread with them).
+            let _poison = PoisonOnPanic(&self.barrier);
             let (n, w, rpb) = (self.n, 3 * self.n, self.rows_per_band);
             let band = &self.bands[b];
             let mut acc = band.acc.lock().expect("lock");
@@ -672,20 +675,37 @@ mod banded {
     }
 
     /// Threads wait at it until all have arrived: spinning for a few microseconds, then yielding (on a
-    /// busy machine the thread it waits for may be sharing its core).
+    /// busy machine the thread it waits for may be sharing its core). Poisoned when a thread panics.
     #[derive(Debug)]
-    struct SpinBarrier {
+    pub(super) struct SpinBarrier {
         n: usize,
         arrived: AtomicUsize,
         generation: AtomicUsize,
+        poisoned: AtomicBool,
+    }
+
+    /// Poisons its barrier when dropped by a panic.
+    pub(super) struct PoisonOnPanic<'a>(pub(super) &'a SpinBarrier);
+
+    impl Drop for PoisonOnPanic<'_> {
+        fn drop(&mut self) {
+            if std::thread::panicking() {
+                self.0.poisoned.store(true, Ordering::Release);
+            }
+        }
     }
 
     impl SpinBarrier {
-        fn new(n: usize) -> Self {
-            Self { n, arrived: AtomicUsize::new(0), generation: AtomicUsize::new(0) }
+        pub(super) fn new(n: usize) -> Self {
+            Self {
+                n,
+                arrived: AtomicUsize::new(0),
+                generation: AtomicUsize::new(0),
+                poisoned: AtomicBool::new(false),
+            }
         }
 
-        fn wait(&self) {
+        pub(super) fn wait(&self) {
             let generation = self.generation.load(Ordering::Acquire);
             if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == self.n {
                 self.arrived.store(0, Ordering::Relaxed);
@@ -694,6 +714,7 @@ mod banded {
             }
             let mut spins = 0u32;
             while self.generation.load(Ordering::Acquire) == generation {
+                assert!(!self.poisoned.load(Ordering::Acquire), "another band's thread panicked");
                 if spins < 1 << 11 {
                     spins += 1;
                     std::hint::spin_loop();
@@ -702,5 +723,24 @@ mod banded {
                 }
             }
         }
+    }
+}
+
+#[cfg(all(test, feature = "parallel"))]
+mod tests {
+    use super::banded::SpinBarrier;
+
+    #[test]
+    fn a_panic_in_one_thread_poisons_the_barrier_instead_of_hanging_the_others() {
+        let barrier = SpinBarrier::new(2);
+        let outcome = std::thread::scope(|scope| {
+            let waiter = scope.spawn(|| barrier.wait());
+            let failing = scope.spawn(|| {
+                let _poison = super::banded::PoisonOnPanic(&barrier);
+                panic!("a band's work failed");
+            });
+            (waiter.join().is_err(), failing.join().is_err())
+        });
+        assert_eq!(outcome, (true, true), "both threads end, with a panic");
     }
 }
