@@ -295,31 +295,36 @@ impl NetworkSim {
         Ok(())
     }
 
+    /// Whether [`NetworkSim::run`] takes the network's fused run ([`SpringNetwork::run_symplectic_euler`])
+    /// when the network is a sheet: symplectic Euler with nothing but the springs.
+    fn fuses(&self) -> bool {
+        self.stepper.integrator() == Integrator::SymplecticEuler
+            && self.colliders.is_empty()
+            && self.self_collision.is_none()
+    }
+
+    /// Threads [`NetworkSim::run`] uses ([`SpringNetwork::threads`]).
+    pub fn threads(&self) -> usize {
+        self.network.threads(self.fuses())
+    }
+
     /// Runs `n` steps, stopping at the first non-finite state; returns the step where it appeared.
     ///
     /// A sheet with nothing but its springs, stepped with symplectic Euler, takes the network's fused
     /// path ([`SpringNetwork::run_symplectic_euler`]): the same bits, with fewer passes over memory.
     pub fn run(&mut self, n: usize) -> Result<(), RunError> {
-        if self.stepper.integrator() == Integrator::SymplecticEuler
-            && self.colliders.is_empty()
-            && self.self_collision.is_none()
+        if self.fuses()
             && let Some(outcome) =
                 self.network.run_symplectic_euler(n, self.dt, &mut self.state.x, &mut self.state.v)
         {
-            let done = match outcome {
-                Ok(()) => n,
-                Err(k) => k,
-            };
+            let done = outcome.err().unwrap_or(n);
             self.step += done;
             self.stats.evaluations += done;
-            return match outcome {
-                Ok(()) => Ok(()),
-                Err(_) => Err(RunError::NonFinite {
-                    step: self.step,
-                    time: self.time(),
-                    particle: self.state.first_non_finite().unwrap_or(0),
-                }),
-            };
+            if outcome.is_ok() {
+                return Ok(());
+            }
+            let particle = self.state.first_non_finite().unwrap_or(0);
+            return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
         }
         for _ in 0..n {
             self.step().map_err(|e| RunError::Solver { step: self.step + 1, source: e })?;

@@ -91,14 +91,7 @@ impl GridStencil {
             })
         });
         let acc = &self.acc;
-        for_each_chunk(f, n, parallel, |j, out| {
-            arch.dispatch(|| {
-                let a = &acc[j * w..(j + 1) * w];
-                for (i, o) in out.iter_mut().enumerate() {
-                    *o = DVec3::new(a[i], a[n + i], a[2 * n + i]);
-                }
-            })
-        });
+        for_each_chunk(f, n, parallel, |j, out| arch.dispatch(|| join_row(flat_row(acc, w, j), n, out)));
     }
 
     /// Runs `steps` steps of symplectic Euler of length h from (x, v), and leaves the state in (x, v).
@@ -122,18 +115,22 @@ impl GridStencil {
         v: &mut [DVec3],
         parallel: bool,
     ) -> Result<(), usize> {
-        self.load(x, v, parallel);
+        // Rows in and out on the caller's thread: a copy once a run.
+        self.load(x, v, false);
         self.saved_pos.clone_from(&self.pos);
         self.saved_vel.clone_from(&self.vel);
         #[cfg(feature = "parallel")]
         let banded = parallel && self.run_banded(steps, h, particles, x, v);
         #[cfg(not(feature = "parallel"))]
-        let banded = false;
+        let banded = {
+            let _ = parallel;
+            false
+        };
         if !banded {
             for _ in 0..steps {
-                self.symplectic_euler_step(h, particles, parallel);
+                self.symplectic_euler_step(h, particles);
             }
-            self.store(x, v, parallel);
+            self.store(x, v);
         }
         if all_finite(x, v) {
             return Ok(());
@@ -141,8 +138,8 @@ impl GridStencil {
         self.pos.clone_from(&self.saved_pos);
         self.vel.clone_from(&self.saved_vel);
         for k in 1..=steps {
-            self.symplectic_euler_step(h, particles, false);
-            self.store(x, v, parallel);
+            self.symplectic_euler_step(h, particles);
+            self.store(x, v);
             if !all_finite(x, v) {
                 return Err(k);
             }
@@ -150,6 +147,14 @@ impl GridStencil {
         // Not reached: the rerun repeats the same operations. Were it reached, the state is still not
         // finite after the last step.
         Err(steps)
+    }
+
+    /// Threads [`GridStencil::run_symplectic_euler`] uses with `parallel`: one per band of rows.
+    pub fn fused_threads(&self) -> usize {
+        #[cfg(feature = "parallel")]
+        return banded::band_count(self.n);
+        #[cfg(not(feature = "parallel"))]
+        1
     }
 
     /// Runs the steps on all cores, each thread moving a band of rows, from the rows in `pos` and `vel`,
@@ -165,19 +170,20 @@ impl GridStencil {
         x: &mut [DVec3],
         v: &mut [DVec3],
     ) -> bool {
-        let threads = std::thread::available_parallelism().map_or(1, |t| t.get());
-        if !self.bands.prepare(self.n, &self.classes, self.arch, threads) {
+        if !self.bands.prepare(self.n, &self.classes, self.arch) {
             return false;
         }
         self.bands.run(&self.pos, &self.vel, p, steps, h, x, v);
         true
     }
 
-    fn symplectic_euler_step(&mut self, h: f64, p: Particles<'_>, parallel: bool) {
-        self.spring_forces(parallel);
+    /// One step on the caller's thread (the banded run is the parallel one).
+    fn symplectic_euler_step(&mut self, h: f64, p: Particles<'_>) {
+        self.spring_forces(false);
         let (n, w, arch) = (self.n, 3 * self.n, self.arch);
         let (classes, forces) = (&self.classes, &self.forces);
-        let body = |j: usize, ((pos, vel), acc): ((&mut [f64], &mut [f64]), &mut [f64])| {
+        let rows = self.pos.chunks_mut(w).zip(self.vel.chunks_mut(w)).zip(self.acc.chunks_mut(w));
+        for (j, ((pos, vel), acc)) in rows.enumerate() {
             arch.dispatch(|| {
                 let range = j * n..(j + 1) * n;
                 let (m, inv_m, pinned) =
@@ -186,19 +192,8 @@ impl GridStencil {
                 split_row(acc, n, |c, i| p.gravity[c] * m[i]);
                 sum_row(classes, |k| flat_row(&forces[k], w, j), |k| flat_end(classes, forces, w, k, j), acc);
                 move_row(n, h, acc, inv_m, pinned, pos, vel);
-            })
-        };
-        #[cfg(feature = "parallel")]
-        if parallel {
-            use rayon::prelude::*;
-            let rows =
-                self.pos.par_chunks_mut(w).zip(self.vel.par_chunks_mut(w)).zip(self.acc.par_chunks_mut(w));
-            rows.enumerate().for_each(|(j, r)| body(j, r));
-            return;
+            });
         }
-        let _ = parallel;
-        let rows = self.pos.chunks_mut(w).zip(self.vel.chunks_mut(w)).zip(self.acc.chunks_mut(w));
-        rows.enumerate().for_each(|(j, r)| body(j, r));
     }
 
     /// Copies (x, v) into rows.
@@ -212,17 +207,12 @@ impl GridStencil {
     }
 
     /// Copies the rows back into (x, v).
-    fn store(&self, x: &mut [DVec3], v: &mut [DVec3], parallel: bool) {
+    fn store(&self, x: &mut [DVec3], v: &mut [DVec3]) {
         let (n, arch) = (self.n, self.arch);
         for (src, dst) in [(&self.pos, x), (&self.vel, v)] {
-            for_each_chunk(dst, n, parallel, |j, out| {
-                arch.dispatch(|| {
-                    let r = &src[j * 3 * n..(j + 1) * 3 * n];
-                    for (i, o) in out.iter_mut().enumerate() {
-                        *o = DVec3::new(r[i], r[n + i], r[2 * n + i]);
-                    }
-                })
-            });
+            for (row, out) in src.chunks(3 * n).zip(dst.chunks_mut(n)) {
+                arch.dispatch(|| join_row(row, n, out));
+            }
         }
     }
 
@@ -250,6 +240,14 @@ fn split_row(row: &mut [f64], n: usize, value: impl Fn(usize, usize) -> f64) {
         rx[i] = value(0, i);
         ry[i] = value(1, i);
         rz[i] = value(2, i);
+    }
+}
+
+/// Writes the component rows `[x(N) y(N) z(N)]` of `row` into the N vectors of `out`.
+#[inline(always)]
+fn join_row(row: &[f64], n: usize, out: &mut [DVec3]) {
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = DVec3::new(row[i], row[n + i], row[2 * n + i]);
     }
 }
 
@@ -359,6 +357,15 @@ fn flat_end<'a>(
     (j >= dj).then(|| flat_row(&forces[k], w, j - dj))
 }
 
+/// Threads the per-pass parallel evaluation ([`GridStencil::add_forces`] with `parallel`) uses: the
+/// rayon pool's.
+pub(crate) fn pool_threads() -> usize {
+    #[cfg(feature = "parallel")]
+    return rayon::current_num_threads();
+    #[cfg(not(feature = "parallel"))]
+    1
+}
+
 fn all_finite(x: &[DVec3], v: &[DVec3]) -> bool {
     x.iter().zip(v).all(|(x, v)| x.is_finite() && v.is_finite())
 }
@@ -402,7 +409,7 @@ mod banded {
 
     use anima_geom::DVec3;
 
-    use super::{Particles, StencilClass, class_row, move_row, split_row, sum_row};
+    use super::{Particles, StencilClass, class_row, join_row, move_row, split_row, sum_row};
 
     /// The most threads a run uses.
     const MAX_BANDS: usize = 8;
@@ -490,17 +497,18 @@ mod banded {
         &guards[r / rpb].as_ref().expect("band")[local * w..(local + 1) * w]
     }
 
+    /// Bands, one per thread, of a sheet of n rows: as many as the machine has cores, at most
+    /// [`MAX_BANDS`], each of at least [`MIN_ROWS`] rows; 1 means no banded run.
+    pub(super) fn band_count(n: usize) -> usize {
+        let cores = std::thread::available_parallelism().map_or(1, |t| t.get());
+        cores.min(MAX_BANDS).min(n / MIN_ROWS).max(1)
+    }
+
     impl Bands {
-        /// Splits n rows over up to `threads` bands (at least [`MIN_ROWS`] rows each) and starts their
-        /// threads, unless they are there already; false when there would be only one band.
-        pub fn prepare(
-            &mut self,
-            n: usize,
-            classes: &[StencilClass],
-            arch: pulp::Arch,
-            threads: usize,
-        ) -> bool {
-            let count = threads.min(MAX_BANDS).min(n / MIN_ROWS);
+        /// Splits n rows over [`band_count`] bands and starts their threads, unless they are there
+        /// already; false when there would be only one band.
+        pub fn prepare(&mut self, n: usize, classes: &[StencilClass], arch: pulp::Arch) -> bool {
+            let count = band_count(n);
             if count < 2 {
                 return false;
             }
@@ -597,10 +605,7 @@ mod banded {
             for band in &shared.bands {
                 for (src, dst) in [(&band.pos, &mut *x), (&band.vel, &mut *v)] {
                     for (r, row) in src.read().expect("lock").chunks(w).enumerate() {
-                        let out = &mut dst[(band.first + r) * n..(band.first + r + 1) * n];
-                        for (i, o) in out.iter_mut().enumerate() {
-                            *o = DVec3::new(row[i], row[n + i], row[2 * n + i]);
-                        }
+                        join_row(row, n, &mut dst[(band.first + r) * n..(band.first + r + 1) * n]);
                     }
                 }
             }

@@ -163,14 +163,24 @@ impl SpringNetwork {
         self.add_forces_by_spring(x, v, f);
     }
 
-    /// Whether [`SpringNetwork::run_symplectic_euler`] can run this network: a sheet built by
-    /// [`SheetSpec::build`].
-    pub fn has_stencil(&self) -> bool {
-        self.stencil.is_some()
+    /// Threads a run on this network uses: 1 unless [`SpringNetwork::parallel`] is set and the network
+    /// is a sheet built by [`SheetSpec::build`]; then, for [`SpringNetwork::run_symplectic_euler`]
+    /// (`fused`), one per band of rows, else the pool's that shares out each pass over the springs.
+    pub fn threads(&self, fused: bool) -> usize {
+        match &self.stencil {
+            Some(stencil) if self.parallel => {
+                if fused {
+                    stencil.fused_threads()
+                } else {
+                    crate::sheet_stencil::pool_threads()
+                }
+            }
+            _ => 1,
+        }
     }
 
-    /// Runs `steps` steps of symplectic Euler of length h from (x, v) on a sheet's stencil (see
-    /// [`SpringNetwork::has_stencil`]), with the state kept in rows of components between steps. The
+    /// Runs `steps` steps of symplectic Euler of length h from (x, v) on a sheet's stencil (a network
+    /// built by [`SheetSpec::build`]), with the state kept in rows of components between steps. The
     /// same bits as stepping the network with `anima_ode`'s symplectic Euler, with fewer passes over
     /// memory.
     ///

@@ -27,7 +27,14 @@ fn one_thread_and_all_agree(integrator: Integrator) {
     };
     let (one, all) = (detail(false), detail(true));
     assert_eq!(one.threads, 1);
-    assert_eq!(all.threads, rayon::current_num_threads());
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    if cores > 1 {
+        assert!(
+            (2..=cores).contains(&all.threads),
+            "{integrator:?}: {} threads on {cores} cores",
+            all.threads
+        );
+    }
     assert!(one.max_speed > 1e-3, "the sheet moves: {} m/s", one.max_speed);
     for (a, b) in one.center_of_mass.iter().zip(&all.center_of_mass) {
         assert_eq!(

@@ -282,9 +282,9 @@ struct Colliders {
 /// surface triangle, and is not tested against the surfaces; one within the static clearance is not
 /// tested against the static objects. The two are kept apart because a cloth resting on a table is
 /// within a hair of the table but far from its own triangles: its paths are tested against the table
-/// only. Skipping only tests
-/// that cannot hit, and never changing the candidates of the others, the pass gives the results of the
-/// brute force, to the bit (checked by the tests below and by `docs/reproduction/flex3d-results.md`).
+/// only. Skipping only tests that cannot hit, and never changing the candidates of the others, the pass
+/// gives the results of the brute force, to the bit (checked by the tests below and by
+/// `docs/reproduction/flex3d-results.md`).
 #[derive(Debug, Clone, Default)]
 struct SurfaceBins {
     grid: TriangleGrid,

@@ -50,10 +50,11 @@ pub struct RunOptions {
     pub parallel: bool,
 }
 
-/// Sheets smaller than this run on one thread even when [`RunOptions::parallel`] is set: below it two
-/// threads do not pay for their hand-over at every step. Measured with symplectic Euler on this
-/// project's 2-core machine, alternating one and two threads (`anima run` with and without
-/// `--one-thread`): the standard sheet N = 64 took 3.5–3.7 s on two threads against 1.29–1.33 s on one,
+/// Sheets smaller than this run on one thread even when [`RunOptions::parallel`] is set, unless stepped
+/// with symplectic Euler ([`PARALLEL_MIN_PARTICLES_FUSED`]): the other explicit methods share out each
+/// pass over the springs on the pool, and below it two threads do not pay for their hand-over at every
+/// pass. Measured when symplectic Euler still ran that way, on this project's 2-core machine,
+/// alternating one and two threads (`anima run` with and without `--one-thread`): the standard sheet N = 64 took 3.5–3.7 s on two threads against 1.29–1.33 s on one,
 /// N = 128 0.75–0.85 s against 0.59–0.61 s, and N = 256 (65 536 particles) 2.50–2.62 s against
 /// 2.97–3.00 s, the first size where the second core pays.
 pub const PARALLEL_MIN_PARTICLES: usize = 65_536;

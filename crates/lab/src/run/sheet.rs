@@ -57,10 +57,10 @@ pub fn run(
     net.parallel = opts.parallel
         && n >= super::parallel_min_particles(scene.integrator)
         && !scene.integrator.is_implicit();
-    let threads = if net.parallel { rayon::current_num_threads() } else { 1 };
     let n_springs = net.springs().len();
     let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
     let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
+    let threads = sim.threads();
     opts.solve.configure(sim.stepper_mut());
     let mut warnings = Vec::new();
     let pinned = sim.network.pinned().to_vec();
