@@ -34,7 +34,8 @@ enum Command {
     /// FLEX3D (docs/reproduction/flex3d-results.md): table-4-1, e-1 … e-8, or all.
     /// Oliveira 2013 (oliveira-results.md): oliveira-1, oliveira-2, oliveira-3, or oliveira; with
     /// --adaptive the remeshers (oliveira-adaptive.md); oliveira-implicit: the fine drapes with implicit
-    /// integrators (oliveira-implicit.md).
+    /// integrators (oliveira-implicit.md); membrane: mesh convergence of the spring models and of the
+    /// continuum membrane (membrane.md).
     /// Nunes 2006 (nunes-results.md): nunes-walk, nunes-throw, nunes-flip, or nunes; beyond the thesis:
     /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
     /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
@@ -102,6 +103,7 @@ fn reproduce(
     }
     match experiment {
         "oliveira-implicit" => return oliveira::implicit::reproduce(repo),
+        "membrane" => return oliveira::membrane::reproduce(repo),
         "nunes-optimisers" => {
             print!("{}", nunes::optimisers::optimisers(repo, seeds.unwrap_or(10))?);
             return Ok(());

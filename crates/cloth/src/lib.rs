@@ -43,6 +43,7 @@
 
 pub mod contact_mode;
 pub mod flex3d;
+pub mod membrane;
 pub mod network_sim;
 pub mod oliveira;
 pub mod self_collision;

@@ -6,15 +6,15 @@
 use anima_body::{BodyPose, World};
 use anima_character::Character;
 use anima_cloth::flex3d::Flex3dWorld;
-use anima_cloth::network_sim::NetworkSim;
 use anima_cloth::oliveira::AdaptiveCloth;
-use anima_geom::{DVec3, TriangleMesh, grid_triangles};
+use anima_geom::{DVec3, TriangleMesh};
 use anima_scene::Scene;
 use anyhow::{Context, Result, bail};
 
 use crate::oliveira::object_meshes;
 use crate::run::SolveOptions;
 use crate::run::body::{Figures, Posed, build_character};
+use crate::run::sheet::Cloth;
 
 /// A cloth scene of any kind (a sheet, FLEX3D surfaces, an Oliveira drape, remeshed or not), ready to
 /// step.
@@ -30,7 +30,7 @@ pub struct ClothSim {
 
 #[derive(Debug)]
 enum ClothModel {
-    Sheet(Box<NetworkSim>),
+    Sheet(Box<Cloth>),
     Flex3d(Box<Flex3dWorld>),
     Oliveira(Box<AdaptiveCloth>),
 }
@@ -41,9 +41,8 @@ impl ClothSim {
     pub fn new(scene: &Scene, solve: &SolveOptions) -> Result<Self> {
         Ok(match scene {
             Scene::Sheet(s) => {
-                let mut sim = NetworkSim::new(s.sheet.build(), s.sheet.positions(), s.integrator, s.dt_s);
+                let (mut sim, triangles) = Cloth::new(s, false)?;
                 solve.configure(sim.stepper_mut());
-                let triangles = grid_triangles(s.sheet.n, s.sheet.n);
                 Self {
                     model: ClothModel::Sheet(Box::new(sim)),
                     triangles,
@@ -142,7 +141,7 @@ impl ClothSim {
 
     pub fn positions(&self) -> &[DVec3] {
         match &self.model {
-            ClothModel::Sheet(s) => &s.state.x,
+            ClothModel::Sheet(s) => &s.state().x,
             ClothModel::Flex3d(w) => w.positions(),
             ClothModel::Oliveira(c) => c.cloth().positions(),
         }
@@ -150,7 +149,7 @@ impl ClothSim {
 
     pub fn velocities(&self) -> &[DVec3] {
         match &self.model {
-            ClothModel::Sheet(s) => &s.state.v,
+            ClothModel::Sheet(s) => &s.state().v,
             ClothModel::Flex3d(w) => w.velocities(),
             ClothModel::Oliveira(c) => c.cloth().velocities(),
         }
@@ -172,8 +171,8 @@ impl ClothSim {
         }
         match &mut self.model {
             ClothModel::Sheet(s) => {
-                s.state.x.copy_from_slice(x);
-                s.state.v.copy_from_slice(v);
+                s.state_mut().x.copy_from_slice(x);
+                s.state_mut().v.copy_from_slice(v);
                 s.stepper_mut().reset_history();
             }
             ClothModel::Flex3d(w) => w.set_state(x, v),

@@ -8,7 +8,7 @@
 //! | kind | file | parts |
 //! |---|---|---|
 //! | FLEX3D surfaces (Nedel 1993) | a `.PAR` script (§5.2) or `Flex3dScene(…)` | `.OBT` objects |
-//! | a spring-network sheet | `SheetScene(…)` | — |
+//! | a square sheet: springs, or the continuum membrane (`model: Membrane(…)`) | `SheetScene(…)` | — |
 //! | an Oliveira 2013 drape | `OliveiraScene(…)`, `AdaptiveOliveiraScene(…)` | OBJ meshes |
 //! | articulated figures holding poses | `BodyScene(…)` | skeletons |
 //! | figures driven by a controller (Nunes 2006) | `CharacterScene(…)` | skeletons, a controller |

@@ -2,6 +2,7 @@
 //! RON. The file starts with the struct name, `SheetScene(`, which is how `anima run` tells it from a
 //! FLEX3D scene.
 
+use anima_cloth::membrane::MembraneMaterial;
 use anima_cloth::spring_net::SheetSpec;
 use anima_ode::Integrator;
 use serde::{Deserialize, Serialize};
@@ -20,6 +21,22 @@ pub struct SheetScene {
     /// Frames written per second.
     pub frame_rate_hz: f64,
     pub integrator: Integrator,
+    /// The cloth model: the sheet's springs (`Springs`, the default when the field is left out) or the
+    /// continuum membrane of `anima_cloth::membrane` (`Membrane((young_thickness_n_m: …, poisson: …,
+    /// bending_n_m: …, damping_s: …))`), whose refinement converges; with it the sheet's stiffnesses
+    /// and damping are unused.
+    #[serde(default)]
+    pub model: SheetModel,
+}
+
+/// The cloth model of a sheet scene.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum SheetModel {
+    /// The sheet's structural, shear and bend springs.
+    #[default]
+    Springs,
+    /// Co-rotational constant-strain triangles and quadratic bending in this material.
+    Membrane(MembraneMaterial),
 }
 
 impl SheetScene {
@@ -31,6 +48,7 @@ impl SheetScene {
             dt_s: if n <= 32 { 2e-4 } else { 1e-4 },
             frame_rate_hz: 30.0,
             integrator: Integrator::SymplecticEuler,
+            model: SheetModel::Springs,
         }
     }
 }
@@ -78,6 +96,24 @@ impl SheetScene {
         if !(sheet.height.is_finite() && sheet.gravity.is_finite()) {
             return bad("sheet.height_m".into(), "expected a finite height and gravity".into());
         }
+        if let SheetModel::Membrane(m) = self.model {
+            let fields = [
+                ("model.young_thickness_n_m", m.young_thickness),
+                ("model.bending_n_m", m.bending),
+                ("model.damping_s", m.damping),
+            ];
+            for (field, v) in fields {
+                if !(v >= 0.0 && v.is_finite()) {
+                    return bad(field.into(), format!("expected a finite number ≥ 0, found {v}"));
+                }
+            }
+            if !(0.0..0.5).contains(&m.poisson) {
+                return bad(
+                    "model.poisson".into(),
+                    format!("expected a number in [0, 0.5), found {}", m.poisson),
+                );
+            }
+        }
         if let Some(p) = sheet.pinned.iter().position(|&(i, j)| i >= sheet.n || j >= sheet.n) {
             let (i, j) = sheet.pinned[p];
             return bad(
@@ -117,6 +153,28 @@ mod tests {
         let bad = text.replace("damping_n_s_m", "damping");
         let e = from_ron_str(&bad).unwrap_err();
         assert!(e.found == "damping" && e.line > 1, "{e}");
+    }
+
+    #[test]
+    fn a_membrane_sheet_round_trips_and_its_material_is_checked() {
+        let s = SheetScene {
+            model: SheetModel::Membrane(MembraneMaterial::STANDARD),
+            ..SheetScene::standard(16)
+        };
+        let text = to_ron_string(&s);
+        assert!(text.contains("Membrane("), "{text}");
+        assert_eq!(from_ron_str(&text).unwrap(), s);
+        assert!(s.check().is_ok());
+        let bad = SheetScene {
+            model: SheetModel::Membrane(MembraneMaterial { poisson: 0.7, ..MembraneMaterial::STANDARD }),
+            ..s.clone()
+        };
+        assert!(bad.check().unwrap_err().to_string().contains("model.poisson"));
+        let bad = SheetScene {
+            model: SheetModel::Membrane(MembraneMaterial { bending: f64::NAN, ..MembraneMaterial::STANDARD }),
+            ..s
+        };
+        assert!(bad.check().unwrap_err().to_string().contains("model.bending_n_m"));
     }
 }
 

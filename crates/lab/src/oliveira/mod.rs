@@ -5,6 +5,7 @@
 pub mod adaptive;
 pub mod drapes;
 pub mod implicit;
+pub mod membrane;
 
 use std::ops::ControlFlow;
 use std::path::PathBuf;

@@ -4,11 +4,12 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anima_cloth::network_sim::NetworkSim;
+use anima_cloth::membrane::{MembraneSheetSpec, MembraneSim};
+use anima_cloth::network_sim::{NetworkSim, RunError};
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3, grid_triangles};
-use anima_ode::{State, StepControl, Stepper, integrate};
-use anima_scene::sheet::SheetScene;
+use anima_ode::{OdeSystem, State, StepControl, Stepper, integrate};
+use anima_scene::sheet::{SheetModel, SheetScene};
 use anima_viz::gltf::UpAxis;
 use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
 use anyhow::{Result, bail};
@@ -21,10 +22,15 @@ use crate::output::write_atomic;
 /// The numbers of a sheet run.
 #[derive(Debug, Clone, Serialize)]
 pub struct SheetDetail {
+    /// `springs` or `membrane` ([`SheetModel`]).
+    pub model: &'static str,
     pub integrator: String,
     pub dt: f64,
     pub particles: usize,
+    /// Springs of a spring sheet; 0 for a membrane.
     pub springs: usize,
+    /// Triangles of a membrane; 0 for a spring sheet.
+    pub triangles: usize,
     pub ns_per_particle_step: f64,
     /// Threads the spring forces were evaluated on ([`RunOptions::parallel`]; 1 for the implicit
     /// integrators).
@@ -52,22 +58,35 @@ pub fn run(
     {
         bail!("the reference has {} vertices, the sheet {n} particles", r.len());
     }
-    let mut net = scene.sheet.build();
-    // The implicit steps evaluate their forces with the system, spring by spring, on one thread.
-    net.parallel = opts.parallel
-        && n >= super::parallel_min_particles(scene.integrator)
-        && !scene.integrator.is_implicit();
-    let n_springs = net.springs().len();
-    let triangles = grid_triangles(scene.sheet.n, scene.sheet.n);
-    let mut sim = NetworkSim::new(net, scene.sheet.positions(), scene.integrator, scene.dt_s);
-    let threads = sim.threads();
+    let (mut sim, triangles) = Cloth::new(scene, opts.parallel)?;
+    let (n_springs, n_triangles) = match &sim {
+        Cloth::Springs(s) => (s.network.springs().len(), 0),
+        Cloth::Membrane(m) => (0, m.membrane.n_triangles()),
+    };
+    let threads = match &sim {
+        Cloth::Springs(s) => s.threads(),
+        Cloth::Membrane(_) => 1,
+    };
     opts.solve.configure(sim.stepper_mut());
     let mut warnings = Vec::new();
-    let pinned = sim.network.pinned().to_vec();
+    let pinned: Vec<bool> = {
+        let mut p = vec![false; n];
+        for &(i, j) in &scene.sheet.pinned {
+            p[j * scene.sheet.n + i] = true;
+        }
+        p
+    };
     let v = vec![DVec3::ZERO; n];
-    let omega = anima_ode::stability::max_frequency(&mut sim.network, 0.0, &sim.state.x, &v, &pinned, 60);
-    let damping =
-        (scene.sheet.damping > 0.0).then(|| format!("spring damping c = {} N·s/m", scene.sheet.damping));
+    let x0 = sim.state().x.clone();
+    let omega = anima_ode::stability::max_frequency(sim.system(), 0.0, &x0, &v, &pinned, 60);
+    let damping = match scene.model {
+        SheetModel::Springs => {
+            (scene.sheet.damping > 0.0).then(|| format!("spring damping c = {} N·s/m", scene.sheet.damping))
+        }
+        SheetModel::Membrane(m) => {
+            (m.damping > 0.0).then(|| format!("stiffness-proportional damping c_d = {} s", m.damping))
+        }
+    };
     if let Some(w) = stability_warning(
         scene.integrator,
         scene.dt_s,
@@ -88,7 +107,7 @@ pub fn run(
         Some(_) => {
             let up = UpAxis::against(scene.sheet.gravity, UpAxis::PlusZ);
             let mut e = GltfExport::cloth(up, &[], &[("sheet", n, &triangles)], n_frames)?;
-            e.deforming_frame(0, sim.time(), |_| &sim.state.x[..]);
+            e.deforming_frame(0, sim.time(), |_| &sim.state().x[..]);
             Some(e)
         }
         None => None,
@@ -102,12 +121,12 @@ pub fn run(
     if scene.integrator.is_adaptive() {
         // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
         let mut stepper = Stepper::new(scene.integrator, n);
-        let mut state = sim.state.clone();
+        let mut state = sim.state().clone();
         let mut scratch = State::zeros(n);
         let control =
             StepControl::Adaptive { tolerance: 1e-6, dt_initial: scene.dt_s, dt_min: 1e-8, dt_max: 0.01 };
         match integrate(
-            &mut sim.network,
+            sim.system(),
             &mut stepper,
             control,
             0.0,
@@ -116,16 +135,20 @@ pub fn run(
             &mut scratch,
             |_, _| {},
         ) {
-            Ok(stats) => sim.stats.evaluations = stats.evaluations,
+            Ok(stats) => {
+                if let Cloth::Springs(s) = &mut sim {
+                    s.stats.evaluations = stats.evaluations;
+                }
+            }
             Err(e) => error = Some(e.to_string()),
         }
-        sim.state = state;
+        *sim.state_mut() = state;
         frames = n_frames;
         // The embedded controller gives no frames on the way: the export holds the start and the end.
         if let Some(e) = &mut export
             && error.is_none()
         {
-            e.deforming_frame(n_frames, scene.duration_s, |_| &sim.state.x[..]);
+            e.deforming_frame(n_frames, scene.duration_s, |_| &sim.state().x[..]);
         }
     } else {
         for k in 1..=n_frames {
@@ -141,23 +164,23 @@ pub fn run(
             }
             frames = k;
             if let Some(e) = &mut export {
-                e.deforming_frame(k, sim.time(), |_| &sim.state.x[..]);
+                e.deforming_frame(k, sim.time(), |_| &sim.state().x[..]);
             }
-            watch.look(&sim.state.x, &triangles);
+            watch.look(&sim.state().x, &triangles);
             progress.advance(sim.steps_taken() as u64);
             if let Some(dir) = opts.frame_dir() {
                 write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
-                    Ok(write_obj(w, "sheet", &sim.state.x, &triangles)?)
+                    Ok(write_obj(w, "sheet", &sim.state().x, &triangles)?)
                 })?;
             }
             if opts.picture_dir().is_some() && shown.contains(&k) {
-                snapshots.push((k, sim.time(), sim.state.x.clone()));
+                snapshots.push((k, sim.time(), sim.state().x.clone()));
             }
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     progress.end();
-    let x = &sim.state.x;
+    let x = &sim.state().x;
     watch.look(x, &triangles);
     let steps = sim.steps_taken();
     if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
@@ -173,26 +196,31 @@ pub fn run(
         frames,
         simulated_seconds: sim.time(),
         wall_seconds,
-        all_finite: !diverged && sim.state.first_non_finite().is_none(),
+        all_finite: !diverged && sim.state().first_non_finite().is_none(),
         error,
         warnings,
         self_intersections: Some(watch.largest),
         detail: Detail::Sheet(SheetDetail {
+            model: match scene.model {
+                SheetModel::Springs => "springs",
+                SheetModel::Membrane(_) => "membrane",
+            },
             integrator: scene.integrator.name().to_owned(),
             dt: scene.dt_s,
             particles: n,
             springs: n_springs,
+            triangles: n_triangles,
             ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * n) as f64,
             threads,
-            center_of_mass: sim.network.centre_of_mass(x).to_array(),
+            center_of_mass: sim.centre_of_mass(x).to_array(),
             rms_to_reference: opts.reference.as_ref().map(|r| {
                 (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()
             }),
-            max_strain: sim.network.max_strain(x),
-            max_speed: sim.state.v.iter().map(|v| v.length()).fold(0.0, f64::max),
+            max_strain: sim.max_strain(x),
+            max_speed: sim.state().v.iter().map(|v| v.length()).fold(0.0, f64::max),
             kinetic_energy: 0.5 * scene.sheet.total_mass / n as f64
-                * sim.state.v.iter().map(|v| v.length_squared()).sum::<f64>(),
-            solver_iterations: sim.stats.solver_iterations,
+                * sim.state().v.iter().map(|v| v.length_squared()).sum::<f64>(),
+            solver_iterations: sim.solver_iterations(),
         }),
     };
     if let Some(dir) = &opts.out_dir {
@@ -202,6 +230,124 @@ pub fn run(
         write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
     }
     Ok(summary)
+}
+
+/// The cloth of a sheet scene, in either model (also what [`crate::sim::ClothSim`] steps).
+#[derive(Debug)]
+pub(crate) enum Cloth {
+    Springs(Box<NetworkSim>),
+    Membrane(Box<MembraneSim>),
+}
+
+impl Cloth {
+    /// The scene's cloth at rest and its triangles (the frames' faces); `parallel` as
+    /// [`RunOptions::parallel`].
+    pub(crate) fn new(scene: &SheetScene, parallel: bool) -> Result<(Self, Vec<[u32; 3]>)> {
+        let sheet = &scene.sheet;
+        Ok(match scene.model {
+            SheetModel::Springs => {
+                let mut net = sheet.build();
+                // The implicit steps evaluate their forces with the system, spring by spring, on one
+                // thread.
+                net.parallel = parallel
+                    && sheet.n * sheet.n >= super::parallel_min_particles(scene.integrator)
+                    && !scene.integrator.is_implicit();
+                let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s);
+                (Cloth::Springs(Box::new(sim)), grid_triangles(sheet.n, sheet.n))
+            }
+            SheetModel::Membrane(material) => {
+                let spec = MembraneSheetSpec {
+                    n: sheet.n,
+                    size: sheet.size,
+                    height: sheet.height,
+                    total_mass: sheet.total_mass,
+                    material,
+                    pinned: sheet.pinned.clone(),
+                    gravity: sheet.gravity,
+                };
+                let sim = MembraneSim::new(spec.build()?, spec.positions(), scene.integrator, scene.dt_s);
+                (Cloth::Membrane(Box::new(sim)), spec.triangles())
+            }
+        })
+    }
+
+    pub(crate) fn run(&mut self, steps: usize) -> Result<(), RunError> {
+        match self {
+            Cloth::Springs(s) => s.run(steps),
+            Cloth::Membrane(m) => m.run(steps),
+        }
+    }
+
+    pub(crate) fn state(&self) -> &State<DVec3> {
+        match self {
+            Cloth::Springs(s) => &s.state,
+            Cloth::Membrane(m) => &m.state,
+        }
+    }
+
+    pub(crate) fn state_mut(&mut self) -> &mut State<DVec3> {
+        match self {
+            Cloth::Springs(s) => &mut s.state,
+            Cloth::Membrane(m) => &mut m.state,
+        }
+    }
+
+    fn system(&mut self) -> &mut dyn OdeSystem<Coord = DVec3> {
+        match self {
+            Cloth::Springs(s) => &mut s.network,
+            Cloth::Membrane(m) => &mut m.membrane,
+        }
+    }
+
+    pub(crate) fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
+        match self {
+            Cloth::Springs(s) => s.stepper_mut(),
+            Cloth::Membrane(m) => m.stepper_mut(),
+        }
+    }
+
+    pub(crate) fn time(&self) -> f64 {
+        match self {
+            Cloth::Springs(s) => s.time(),
+            Cloth::Membrane(m) => m.time(),
+        }
+    }
+
+    pub(crate) fn dt(&self) -> f64 {
+        match self {
+            Cloth::Springs(s) => s.dt(),
+            Cloth::Membrane(m) => m.dt(),
+        }
+    }
+
+    pub(crate) fn steps_taken(&self) -> usize {
+        match self {
+            Cloth::Springs(s) => s.steps_taken(),
+            Cloth::Membrane(m) => m.steps_taken(),
+        }
+    }
+
+    fn centre_of_mass(&self, x: &[DVec3]) -> DVec3 {
+        match self {
+            Cloth::Springs(s) => s.network.centre_of_mass(x),
+            Cloth::Membrane(m) => m.membrane.centre_of_mass(x),
+        }
+    }
+
+    /// The largest spring strain, or the largest principal strain of a membrane triangle.
+    fn max_strain(&self, x: &[DVec3]) -> f64 {
+        match self {
+            Cloth::Springs(s) => s.network.max_strain(x),
+            Cloth::Membrane(m) => m.membrane.max_strain(x),
+        }
+    }
+
+    fn solver_iterations(&self) -> usize {
+        match self {
+            Cloth::Springs(s) => s.stats.solver_iterations,
+            Cloth::Membrane(m) => m.solver_iterations,
+        }
+    }
 }
 
 fn write_pictures(
