@@ -61,4 +61,4 @@ pub use skeleton::{
     Actuation, ActuatorDesc, ActuatorSpec, BodyDesc, BuiltinSkeleton, CollisionGroupDesc, Drive, DriveSpec,
     Facing, JointDesc, JointKind, PdMode, Role, Shape, Side, Skeleton, SkeletonDesc, WeldDesc,
 };
-pub use world::{BodyPose, Ground, Momentum, Placement, SolverSettings, Touch, World, WorldSettings};
+pub use world::{BodyPose, Ground, Momentum, Placement, Relief, SolverSettings, Touch, World, WorldSettings};

@@ -15,14 +15,80 @@ use crate::dense::SpdSystem;
 use crate::error::BodyError;
 use crate::skeleton::{DriveSpec, PdMode, Shape, Side, Skeleton};
 
-/// Ground: a horizontal plane.
+/// Ground: a horizontal plane, or one with a slope or a flight of steps beyond a point (the terrains
+/// of a robustness protocol; issue #18).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Ground {
-    /// Height of the plane, metres.
+    /// Height of the plane (of its flat part before the relief), metres.
     pub height: f64,
     /// Coulomb friction coefficient μ of every contact (spec §3.1 proposes 1).
     pub friction: f64,
+    /// What the ground does beyond its flat part; `Flat` when left out.
+    #[serde(default)]
+    pub relief: Relief,
+}
+
+/// The shape of the ground along x (the walking direction) beyond its flat part.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum Relief {
+    /// Flat everywhere.
+    #[default]
+    Flat,
+    /// Flat up to `from_x`, then rising at `degrees` (negative: falling) for ever.
+    Slope { from_x: f64, degrees: f64 },
+    /// Flat up to `from_x`, then `count` steps of `rise` metres (negative: down) every `run` metres, flat
+    /// after the last.
+    Stairs { from_x: f64, rise: f64, run: f64, count: u32 },
+}
+
+impl Ground {
+    /// Height of the ground at x, m.
+    pub fn height_at(&self, x: f64) -> f64 {
+        match self.relief {
+            Relief::Flat => self.height,
+            Relief::Slope { from_x, degrees } => {
+                self.height + (x - from_x).max(0.0) * degrees.to_radians().tan()
+            }
+            Relief::Stairs { from_x, rise, run, count } => {
+                if x < from_x {
+                    self.height
+                } else {
+                    let k = (((x - from_x) / run).floor() + 1.0).min(f64::from(count));
+                    self.height + rise * k
+                }
+            }
+        }
+    }
+
+    /// The ground's pieces as fixed boxes: (centre, angle about z, half-extents in x and y). A box's top
+    /// face is the ground; boxes are 10 m deep and reach 1 km each way (and across, in z).
+    fn pieces(&self) -> Vec<([f64; 2], f64, [f64; 2])> {
+        const FAR: f64 = 1000.0;
+        const DEEP: f64 = 5.0;
+        let flat_until = |x: f64, top: f64| ([(x - FAR) * 0.5 + x * 0.5, top - DEEP], 0.0, [FAR * 0.5, DEEP]);
+        match self.relief {
+            Relief::Flat => Vec::new(),
+            Relief::Slope { from_x, degrees } => {
+                let a = degrees.to_radians();
+                // Top face from (from_x, height) along (cos a, sin a); the box hangs below it.
+                let (c, s) = (a.cos(), a.sin());
+                let top = [from_x + FAR * 0.5 * c, self.height + FAR * 0.5 * s];
+                let centre = [top[0] + DEEP * s, top[1] - DEEP * c];
+                vec![flat_until(from_x, self.height), (centre, a, [FAR * 0.5, DEEP])]
+            }
+            Relief::Stairs { from_x, rise, run, count } => {
+                let mut out = vec![flat_until(from_x, self.height)];
+                for k in 1..=count {
+                    let x0 = from_x + f64::from(k - 1) * run;
+                    let half = if k == count { FAR * 0.5 } else { run * 0.5 };
+                    let top = self.height + rise * f64::from(k);
+                    out.push(([x0 + half, top - DEEP], 0.0, [half, DEEP]));
+                }
+                out
+            }
+        }
+    }
 }
 
 /// Rapier's solver settings. Each costs time and buys accuracy; `docs/body.md` measures them.
@@ -73,7 +139,7 @@ impl WorldSettings {
             dt: 0.05,
             substeps: 1,
             gravity: 9.81,
-            ground: Some(Ground { height: 0.0, friction: 1.0 }),
+            ground: Some(Ground { height: 0.0, friction: 1.0, relief: Relief::Flat }),
             solver: SolverSettings::rapier_default(),
             max_signals_per_actuator: 8,
         }
@@ -108,6 +174,26 @@ impl WorldSettings {
             && !(g.height.is_finite() && g.friction >= 0.0 && g.friction.is_finite())
         {
             return bad(format!("ground needs a finite height and μ ≥ 0, found {g:?}"));
+        }
+        match self.ground.map(|g| g.relief) {
+            Some(Relief::Slope { from_x, degrees }) if !(from_x.is_finite() && degrees.abs() < 60.0) => {
+                return bad(format!(
+                    "a slope needs a finite start and less than 60°, found {from_x} m, {degrees}°"
+                ));
+            }
+            Some(Relief::Stairs { from_x, rise, run, count })
+                if !(from_x.is_finite()
+                    && rise.is_finite()
+                    && rise.abs() <= 1.0
+                    && run > 0.05
+                    && run.is_finite()
+                    && (1..=1000).contains(&count)) =>
+            {
+                return bad(format!(
+                    "stairs need a finite start, a rise of at most 1 m, a run of more than 5 cm and 1 to 1000 steps, found {from_x} m, {rise} m, {run} m, {count}"
+                ));
+            }
+            _ => {}
         }
         let its = [self.solver.iterations, self.solver.pgs_iterations];
         if its.iter().any(|&n| !(1..=10_000).contains(&n)) {
@@ -282,17 +368,36 @@ impl World {
             next_bit: 1,
         };
         if let Some(g) = settings.ground {
-            let body =
-                world.physics.insert_body(rp::RigidBodyBuilder::fixed().translation(v3(0.0, g.height)));
-            let collider = rp::ColliderBuilder::halfspace(na::Unit::new_unchecked(rp::Vector::Y))
-                .friction(g.friction as f32)
-                .restitution(0.0)
-                .collision_groups(rp::InteractionGroups::new(
-                    rp::Group::from_bits_retain(GROUND_BIT),
-                    rp::Group::ALL,
-                    rp::InteractionTestMode::And,
-                ));
-            world.ground = Some(world.physics.insert_collider(collider, Some(body)));
+            let groups = rp::InteractionGroups::new(
+                rp::Group::from_bits_retain(GROUND_BIT),
+                rp::Group::ALL,
+                rp::InteractionTestMode::And,
+            );
+            if g.relief == Relief::Flat {
+                let body =
+                    world.physics.insert_body(rp::RigidBodyBuilder::fixed().translation(v3(0.0, g.height)));
+                let collider = rp::ColliderBuilder::halfspace(na::Unit::new_unchecked(rp::Vector::Y))
+                    .friction(g.friction as f32)
+                    .restitution(0.0)
+                    .collision_groups(groups);
+                world.ground = Some(world.physics.insert_collider(collider, Some(body)));
+            } else {
+                // A relief is boxes whose top faces are the ground; every collider that belongs to no
+                // model counts as ground for the sensors.
+                for (centre, angle, half) in g.pieces() {
+                    let body = world.physics.insert_body(
+                        rp::RigidBodyBuilder::fixed()
+                            .translation(v3(centre[0], centre[1]))
+                            .rotation(rp::Vector::new(0.0, 0.0, angle as f32)),
+                    );
+                    let collider = rp::ColliderBuilder::cuboid(half[0] as f32, half[1] as f32, 1000.0)
+                        .friction(g.friction as f32)
+                        .restitution(0.0)
+                        .collision_groups(groups);
+                    let handle = world.physics.insert_collider(collider, Some(body));
+                    world.ground.get_or_insert(handle);
+                }
+            }
         }
         Ok(world)
     }
@@ -319,7 +424,12 @@ impl World {
         }
         let group_bits: Vec<u32> = (0..n_groups).map(|k| 1u32 << (self.next_bit + k)).collect();
         self.next_bit += n_groups;
-        let ground_y = self.settings.ground.map_or(0.0, |g| g.height);
+        let ground_y = self.settings.ground.map_or(0.0, |g| {
+            g.height_at(match placement {
+                Placement::OnGround { dx } => dx,
+                _ => 0.0,
+            })
+        });
         let offset = match placement {
             Placement::Offset { dx, dy } => [dx, dy],
             Placement::OnGround { dx } => [dx, ground_y - skeleton.lowest_point()],

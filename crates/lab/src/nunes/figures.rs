@@ -47,7 +47,11 @@ fn bounds<'a>(frames: impl Iterator<Item = &'a Frame>, pad: f64) -> (f64, f64, f
 
 /// Draws `frames` (oldest first) over the ground, fading the older ones.
 fn strobe(img: &mut Image, view: &View2d, frames: &[&Frame]) {
-    draw_ground(img, view, 0.0);
+    draw_ground(
+        img,
+        view,
+        &anima_body::WorldSettings::thesis().ground.expect("the thesis's world has a ground"),
+    );
     let n = frames.len().max(2) - 1;
     for (k, f) in frames.iter().enumerate() {
         let weight = 0.3 + 0.7 * k as f64 / n as f64;

@@ -79,6 +79,14 @@ pub fn faithful_character(controller: Controller) -> Result<Character, Character
     humanoid_with(controller, faithful_actuation())
 }
 
+/// [`humanoid_character`] on another ground (a slope or steps of the robustness protocol).
+pub fn humanoid_on(controller: Controller, ground: anima_body::Ground) -> Result<Character, CharacterError> {
+    let mut world = World::new(WorldSettings { ground: Some(ground), ..world_settings(SUBSTEPS) })?;
+    let sk = BuiltinSkeleton::Humanoid.load().with_actuation(actuation())?;
+    world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
+    Character::new(world, controller, procedures(), &[])
+}
+
 fn humanoid_with(controller: Controller, actuation: Actuation) -> Result<Character, CharacterError> {
     let mut world = World::new(world_settings(SUBSTEPS))?;
     let sk = BuiltinSkeleton::Humanoid.load().with_actuation(actuation)?;
@@ -163,11 +171,15 @@ impl Default for WalkRules {
     }
 }
 
-/// Whether the model has fallen: a body other than a foot touches the ground, or the pelvis is low.
-pub fn fallen(s: &anima_body::Sensors, rules: &WalkRules) -> bool {
+/// Whether the model has fallen: a body other than a foot touches the ground, or the pelvis is low
+/// (above the ground under it, when there is one).
+pub fn fallen(s: &anima_body::Sensors, rules: &WalkRules, ground: Option<&anima_body::Ground>) -> bool {
     let feet = s.layout.feet;
     let body_down = s.on_ground.iter().enumerate().any(|(b, &g)| g && !feet.contains(&Some(b)));
-    let low = s.layout.pelvis.is_some_and(|p| s.body_position[p][1] < rules.min_pelvis_height);
+    let low = s.layout.pelvis.is_some_and(|p| {
+        let [x, y] = s.body_position[p];
+        y - ground.map_or(0.0, |g| g.height_at(x)) < rules.min_pelvis_height
+    });
     body_down || low || !s.all_finite()
 }
 
@@ -201,7 +213,7 @@ impl WalkTracker {
     pub fn observe(&mut self, c: &Character) -> bool {
         self.done += 1;
         let s = &c.env.sensors[0];
-        if !self.fell && fallen(s, &self.rules) {
+        if !self.fell && fallen(s, &self.rules, c.env.world.settings().ground.as_ref()) {
             self.fell = true;
         }
         if self.rules.window > 0 {

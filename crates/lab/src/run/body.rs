@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anima_body::{BodyError, BodyPose, Sensors, Shape, Side, Skeleton, World};
+use anima_body::{BodyError, BodyPose, Ground, Sensors, Shape, Side, Skeleton, World};
 use anima_character::{Character, procedures};
 use anima_scene::body::LoadedBody;
 use anima_scene::character::{Evaluation, LoadedCharacter};
@@ -435,7 +435,7 @@ fn view_for(world: &World) -> Result<View2d> {
             y1 = y1.max(p.centre[1]);
         }
     }
-    let ground = world.settings().ground.map_or(0.0, |g| g.height);
+    let ground = world.settings().ground.map_or(0.0, |g| g.height_at(x0).min(g.height_at(x1)));
     Ok(View2d::fit(x0 - 1.0, ground - 0.3, x1 + 1.0, y1 + 0.4, WIDTH, HEIGHT, 8))
 }
 
@@ -444,7 +444,7 @@ fn view_for(world: &World) -> Result<View2d> {
 fn draw(world: &World, view: &View2d, poses: &mut Vec<BodyPose>) -> Result<Image> {
     let mut img = Image::new(WIDTH, HEIGHT, SKY)?;
     if let Some(g) = world.settings().ground {
-        draw_ground(&mut img, view, g.height);
+        draw_ground(&mut img, view, &g);
     }
     for m in 0..world.n_models() {
         world.body_poses(m, poses)?;
@@ -492,10 +492,18 @@ pub fn draw_bodies(img: &mut Image, view: &View2d, poses: &[BodyPose], weight: f
 }
 
 /// Fills everything below `height` (world metres) with the ground colour.
-pub fn draw_ground(img: &mut Image, view: &View2d, height: f64) {
-    let (_, row) = view.to_px(0.0, height);
+pub fn draw_ground(img: &mut Image, view: &View2d, ground: &Ground) {
     let (w, h) = (f64::from(img.width()), f64::from(img.height()));
-    fill_polygon(img, &[(0.0, row), (w, row), (w, h), (0.0, h)], GROUND);
+    // The profile sampled every 4 pixels (x = x_min + px / scale), closed along the picture's bottom.
+    let mut pts: Vec<(f64, f64)> = (0..=img.width().div_ceil(4))
+        .map(|k| {
+            let px = f64::from(k * 4).min(w);
+            let x = view.x_min + px / view.scale;
+            (px, view.to_px(x, ground.height_at(x)).1)
+        })
+        .collect();
+    pts.extend([(w, h), (0.0, h)]);
+    fill_polygon(img, &pts, GROUND);
 }
 
 #[cfg(test)]
