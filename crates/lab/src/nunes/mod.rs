@@ -7,6 +7,7 @@
 pub mod faithful;
 pub mod figures;
 pub mod optimisers;
+pub mod protocol;
 pub mod report;
 
 use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, SolverSettings, World, WorldSettings};

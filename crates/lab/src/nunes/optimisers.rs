@@ -325,12 +325,26 @@ fn robust_search(
     objective: &(impl Fn(&[f64]) -> f64 + Sync),
     seed: u64,
 ) -> Result<(Vec<f64>, f64, usize)> {
+    cmaes_search(name, space, x0, objective, seed, ROBUST_BUDGET)
+}
+
+/// CMA-ES (σ₀ = 0.1 of each interval, no restarts) maximising `objective` from `x0` for about `budget`
+/// evaluations (whole generations), its progress logged; returns the best point, its score and the
+/// evaluations made.
+pub(crate) fn cmaes_search(
+    name: &str,
+    space: anima_control::optimise::Space,
+    x0: Vec<f64>,
+    objective: &(impl Fn(&[f64]) -> f64 + Sync),
+    seed: u64,
+    budget: usize,
+) -> Result<(Vec<f64>, f64, usize)> {
     let f0 = objective(&x0);
     let mut cfg = CmaesConfig::new(x0.clone(), 0.1);
     cfg.restarts = 0;
     let mut opt = Cmaes::new(space, cfg, seed)?;
     let mut log = RunLog::default();
-    while log.len() < ROBUST_BUDGET {
+    while log.len() < budget {
         let before = log.len();
         run(&mut opt, objective, before + 1, &mut log);
         if log.len() == before {
