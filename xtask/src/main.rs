@@ -40,7 +40,8 @@ enum Command {
     /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
     /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
     /// nunes-simbicon-faithful (SIMBICON as published, unoptimised; nunes-simbicon.md) and
-    /// nunes-protocol (CMA-ES for pushes, slopes, steps and 1 m/s; nunes-protocol.md).
+    /// nunes-protocol (CMA-ES for pushes, slopes, steps and 1 m/s, both walker forms over --seeds
+    /// seeds; nunes-protocol.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the FLEX3D experiments (the report holds the literal reading's results;
@@ -117,7 +118,7 @@ fn reproduce(
             print!("{}", nunes::faithful::reproduce(repo)?);
             return Ok(());
         }
-        "nunes-protocol" => return nunes::protocol::reproduce(repo),
+        "nunes-protocol" => return nunes::protocol::reproduce(repo, seeds.unwrap_or(5)),
         "nunes-robust" => {
             print!("{}", nunes::optimisers::robust(repo)?);
             return Ok(());

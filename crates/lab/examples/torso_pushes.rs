@@ -95,7 +95,7 @@ fn main() {
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
         (
-            "SIMBICON form searched for the protocol (`walk-protocol.ron`)",
+            "thesis's machines searched for the protocol (`walk-protocol.ron`)",
             "walk-protocol",
             humanoid,
             protocol::humanoid,

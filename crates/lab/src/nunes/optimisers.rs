@@ -58,7 +58,7 @@ fn score(c: Controller, pushes: &[Push]) -> f64 {
     }
 }
 
-fn with_poses(base: &Controller, x: &[f64]) -> Controller {
+pub(crate) fn with_poses(base: &Controller, x: &[f64]) -> Controller {
     let mut c = base.clone();
     walk_poses::set(&mut c, x);
     c
@@ -308,7 +308,7 @@ fn robust_score(c: &Controller, pushes: &[Push]) -> f64 {
 
 /// The re-authored walker's own twelve pose numbers, read back from `walk.ron` and clamped into
 /// [`walk_poses::space`].
-fn walker_poses(base: &Controller) -> Vec<f64> {
+pub(crate) fn walker_poses(base: &Controller) -> Vec<f64> {
     walk_poses::get(base)
         .iter()
         .zip(walk_poses::LO.iter().zip(walk_poses::HI))
