@@ -144,8 +144,6 @@ pub struct Membrane {
     elements: Vec<Element>,
     hinges: Vec<Hinge>,
     pattern: Vec<(u32, u32)>,
-    /// Scratch of the per-element blocks.
-    blocks: Vec<[[DMat3; 3]; 3]>,
 }
 
 impl Membrane {
@@ -240,7 +238,6 @@ impl Membrane {
             let slots = PAIRS4.map(|(p, q)| slot(v[p], v[q]));
             hinges.push(Hinge { v, k, scale, slots });
         }
-        let blocks = vec![[[DMat3::ZERO; 3]; 3]; elements.len()];
         Ok(Self {
             material,
             inv_masses: masses.iter().map(|m| 1.0 / m).collect(),
@@ -250,7 +247,6 @@ impl Membrane {
             elements,
             hinges,
             pattern,
-            blocks,
         })
     }
 
@@ -320,16 +316,13 @@ impl Membrane {
 
     /// Adds the elastic and damping forces at (x, v) to `f`; with `jac`, also their Jacobians (K to
     /// `k_*`, D = c_d K to `d_*`).
-    fn add_forces(
-        &mut self,
-        x: &[DVec3],
-        v: &[DVec3],
-        f: &mut [DVec3],
-        mut jac: Option<&mut Jacobians<DVec3>>,
-    ) {
+    fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], mut jac: Option<&mut Jacobians<DVec3>>) {
         let (mu, lambda) = self.material.lame();
         let cd = self.material.damping;
-        for (e, blocks) in self.elements.iter().zip(self.blocks.iter_mut()) {
+        // The element's stiffness blocks are needed for its damping force and for the Jacobians only.
+        let with_blocks = cd > 0.0 || jac.is_some();
+        let mut blocks = [[DMat3::ZERO; 3]; 3];
+        for e in &self.elements {
             let Some((r, strain)) = rotation_and_strain(e, x) else {
                 continue;
             };
@@ -340,13 +333,16 @@ impl Membrane {
                 [2.0 * mu * strain[1][0], 2.0 * mu * strain[1][1] + lambda * tr],
             ];
             let p = [r[0] * sigma[0][0] + r[1] * sigma[1][0], r[0] * sigma[0][1] + r[1] * sigma[1][1]];
-            let w = e.g.map(|g| r[0] * g[0] + r[1] * g[1]);
-            let rrt = outer(r[0], r[0]) + outer(r[1], r[1]);
-            for a in 0..3 {
-                for b in 0..3 {
-                    let gg = e.g[a][0] * e.g[b][0] + e.g[a][1] * e.g[b][1];
-                    blocks[a][b] =
-                        (rrt * (mu * gg) + outer(w[b], w[a]) * mu + outer(w[a], w[b]) * lambda) * (-e.area);
+            if with_blocks {
+                let w = e.g.map(|g| r[0] * g[0] + r[1] * g[1]);
+                let rrt = outer(r[0], r[0]) + outer(r[1], r[1]);
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let gg = e.g[a][0] * e.g[b][0] + e.g[a][1] * e.g[b][1];
+                        blocks[a][b] =
+                            (rrt * (mu * gg) + outer(w[b], w[a]) * mu + outer(w[a], w[b]) * lambda)
+                                * (-e.area);
+                    }
                 }
             }
             for a in 0..3 {
@@ -596,10 +592,7 @@ impl MembraneSheetSpec {
     }
 
     pub fn positions(&self) -> Vec<DVec3> {
-        let h = self.size / (self.n - 1) as f64;
-        (0..self.n * self.n)
-            .map(|p| DVec3::new((p % self.n) as f64 * h, (p / self.n) as f64 * h, self.height))
-            .collect()
+        crate::spring_net::grid_positions(self.n, self.size, self.height)
     }
 
     /// Two triangles per cell, the diagonal of cell (i, j) from its (0, 0) corner when i + j is even and

@@ -388,6 +388,13 @@ impl Linearized<DVec3> for SpringNetwork {
     }
 }
 
+/// The flat n × n grid of side `size` at `height` (z up): vertex (i, j) at (i·h, j·h, height), index
+/// j·n + i. Both sheet models lay their vertices out so.
+pub(crate) fn grid_positions(n: usize, size: f64, height: f64) -> Vec<DVec3> {
+    let h = size / (n - 1) as f64;
+    (0..n * n).map(|p| DVec3::new((p % n) as f64 * h, (p / n) as f64 * h, height)).collect()
+}
+
 /// A rectangular sheet of springs on an N×N grid. Also the `sheet` part of a RON sheet scene, with the
 /// units in the field names.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -449,10 +456,7 @@ impl SheetSpec {
 
     /// The particle positions at rest.
     pub fn positions(&self) -> Vec<DVec3> {
-        let h = self.size / (self.n - 1) as f64;
-        (0..self.n * self.n)
-            .map(|p| DVec3::new((p % self.n) as f64 * h, (p / self.n) as f64 * h, self.height))
-            .collect()
+        grid_positions(self.n, self.size, self.height)
     }
 
     /// The sheet's surface, two triangles per cell (the triangulation its OBJ frames are written with).

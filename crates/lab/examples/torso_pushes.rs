@@ -15,26 +15,15 @@ use std::path::Path;
 use anima_body::{BuiltinSkeleton, Ground, Relief, WorldSettings};
 use anima_character::{Character, CharacterError};
 use anima_control::Controller;
-use anima_lab::nunes::{self, Push, WalkRules, faithful, protocol};
+use anima_lab::nunes::{self, Push, faithful, protocol};
 
-const AT: u64 = 400;
-const RECOVERY: u64 = 200;
 const STEP: f64 = 5.0;
 const MAX: f64 = 400.0;
 
-type Build = fn(Controller) -> Character;
 type BuildOn = protocol::Build;
 
 /// Seconds walked on each terrain.
 const TERRAIN_SECONDS: f64 = 60.0;
-
-fn humanoid(c: Controller) -> Character {
-    protocol::humanoid(c, protocol::flat()).expect("humanoid")
-}
-
-fn simbicon_humanoid(c: Controller) -> Character {
-    simbicon_humanoid_on(c, protocol::flat()).expect("humanoid")
-}
 
 fn simbicon_humanoid_on(c: Controller, g: Ground) -> Result<Character, CharacterError> {
     let settings = WorldSettings { ground: Some(g), ..faithful::world_settings() };
@@ -51,60 +40,35 @@ fn on_terrain(c: &Controller, build: BuildOn, relief: Relief) -> (bool, String) 
     }
 }
 
-fn survives(c: &Controller, build: Build, push: Option<Push>) -> bool {
-    let rules = WalkRules { window: 0, ..WalkRules::default() };
-    let pushes: Vec<Push> = push.into_iter().collect();
-    nunes::walk_character(build(c.clone()), AT + RECOVERY, &rules, &pushes, |_| ()).is_ok_and(|o| !o.fell)
-}
-
-/// The largest impulse survived in `direction` (±1) before the first that fells the walker.
-fn largest(c: &Controller, build: Build, direction: f64, push: fn(f64) -> Push) -> f64 {
-    if !survives(c, build, None) {
-        return 0.0;
-    }
-    let mut j = 0.0;
-    while j + STEP <= MAX && survives(c, build, Some(push(direction * (j + STEP)))) {
-        j += STEP;
-    }
-    j
-}
-
 fn main() {
-    let torso = |j: f64| Push::torso(j, AT, 4);
-    let head = |j: f64| Push::impulse(j, AT, 2);
-    let walkers: [(&str, &str, Build, BuildOn, f64); 5] = [
+    let walkers: [(&str, &str, BuildOn, f64); 5] = [
         (
             "thesis's search (`walk-optimised.ron`)",
             "walk-optimised",
-            humanoid,
             protocol::humanoid,
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
         (
             "thesis's machines, robust search (`walk-robust.ron`)",
             "walk-robust",
-            humanoid,
             protocol::humanoid,
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
         (
             "SIMBICON form (`walk-simbicon.ron`)",
             "walk-simbicon",
-            humanoid,
             protocol::humanoid,
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
         (
             "thesis's machines searched for the protocol (`walk-protocol.ron`)",
             "walk-protocol",
-            humanoid,
             protocol::humanoid,
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
         (
             "SIMBICON as published (`walk-simbicon-faithful.ron`)",
             "walk-simbicon-faithful",
-            simbicon_humanoid,
             simbicon_humanoid_on,
             faithful::skeleton().total_mass(),
         ),
@@ -124,13 +88,14 @@ fn main() {
     let mut simbicon_sized = Vec::new();
     let mut terrain_rows = String::new();
     let mut everywhere = Vec::new();
-    for (name, file, build, build_on, mass) in walkers {
+    let (at, recovery) = (protocol::PUSH_AT, protocol::PUSH_RECOVERY);
+    for (name, file, build_on, mass) in walkers {
         let c = nunes::controller(file).expect("controller");
-        let rules = WalkRules { window: 0, ..WalkRules::default() };
-        let free = nunes::walk_character(build(c.clone()), AT + RECOVERY, &rules, &[], |_| ()).expect("walk");
-        let speed = free.distance / ((AT + RECOVERY) as f64 * nunes::DT);
-        let (tf, tb) = (largest(&c, build, 1.0, torso), largest(&c, build, -1.0, torso));
-        let (hf, hb) = (largest(&c, build, 1.0, head), largest(&c, build, -1.0, head));
+        let (_, distance) = protocol::walk_on(&c, build_on, Relief::Flat, at + recovery, &[]);
+        let speed = distance / ((at + recovery) as f64 * nunes::DT);
+        let largest = |push: &dyn Fn(f64) -> Push| protocol::largest_push(&c, build_on, push, STEP, MAX);
+        let (tf, tb) = (largest(&|j| Push::torso(j, at, 4)), largest(&|j| Push::torso(-j, at, 4)));
+        let (hf, hb) = (largest(&|j| Push::impulse(j, at, 2)), largest(&|j| Push::impulse(-j, at, 2)));
         let row = format!(
             "| {name} | {mass:.1} | {speed:.2} | {tf:.0} / {tb:.0} | {:.2} / {:.2} | {hf:.0} / {hb:.0} |\n",
             tf / mass,

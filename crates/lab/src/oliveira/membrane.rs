@@ -33,7 +33,8 @@ pub const STEP: f64 = 1.0 / 1000.0;
 
 /// Newton iterations of every generalised-α step, all of them run. With the default (three, stopping
 /// early once the updates contract) the membrane's integration error on the 65 × 65 mesh was 9.2 mm at
-/// 0.5 s (1/1000 s against 1/2000 s); with six, 2.2 mm. The membrane's stiffness keeps each element's
+/// 0.5 s (1/1000 s against 1/2000 s); with six, 2.2 mm (both measured on a mesh with one diagonal
+/// direction, before `MembraneSheetSpec` alternated them). The membrane's stiffness keeps each element's
 /// rotation fixed, so Newton's method converges only linearly on it and needs the iterations; the
 /// springs' errors change little (1.55 and 0.43 mm for the standard sheet).
 pub const NEWTON_ITERATIONS: usize = 6;

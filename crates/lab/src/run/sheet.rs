@@ -218,8 +218,15 @@ pub fn run(
             }),
             max_strain: sim.max_strain(x),
             max_speed: sim.state().v.iter().map(|v| v.length()).fold(0.0, f64::max),
-            kinetic_energy: 0.5 * scene.sheet.total_mass / n as f64
-                * sim.state().v.iter().map(|v| v.length_squared()).sum::<f64>(),
+            kinetic_energy: match &sim {
+                // Equal particles: ½ (M/n) Σ v².
+                Cloth::Springs(s) => {
+                    0.5 * scene.sheet.total_mass / n as f64
+                        * s.state.v.iter().map(|v| v.length_squared()).sum::<f64>()
+                }
+                // A third of each triangle's mass at each corner.
+                Cloth::Membrane(m) => m.membrane.kinetic_energy(&m.state.v),
+            },
             solver_iterations: sim.solver_iterations(),
         }),
     };
