@@ -40,13 +40,17 @@ const SMOOTHING: f64 = 0.7;
 
 /// Breadth-first hops that grow an aggregate. On the standard sheet (N = 64, whose pattern includes the
 /// skip-one bend springs) radius 3 makes 163 aggregates of about 25 particles (978 coarse unknowns),
-/// radius 2 304 and radius 1 704. Measured there at 1/60 s, two Newton iterations to a relative residual
-/// of 0.03: radius 1 needed 7.9 CG iterations per step but 6 ms per coarse factorisation, radius 2 10.8
-/// and 2.5 ms, radius 3 13.6 and 1.7 ms, the cheapest per step.
-pub(crate) const RADIUS: usize = 3;
+/// radius 2 304 and radius 1 704. Measured there at 1/60 s (generalised-α's defaults, spring-form
+/// Galerkin product, ms per step): radius 3 needs 8.9 CG iterations per step and 1.03 ms of coarse set-up
+/// (4.8 ms in all), radius 4 10.1 and 0.71 (4.6 ms), radius 5 11.0 and 0.56 (4.7 ms), radius 6 12.9
+/// and 0.47 (5.1 ms). Oliveira's three drapes at 1/60 s (contact in the solve) ran 3–9 % faster with
+/// 4 than with 3. (Measured earlier, before the spring-form products and the line search's end
+/// rule: radius 1 needed 7.9 iterations and 6 ms per factorisation, radius 2 10.8 and 2.5 ms, radius
+/// 3 13.6 and 1.7 ms.)
+pub(crate) const RADIUS: usize = 4;
 
 /// Block-Jacobi sweeps before and after the coarse correction. Two sweeps cut the CG iterations by a
-/// third (13.6 → 9.7 per step, measured as above) but cost two more products with A per iteration, and
+/// third (13.6 → 9.7 per step, measured with radius 3 before the spring-form products) but cost two more products with A per iteration, and
 /// were measured slower per step.
 pub(crate) const SWEEPS: usize = 1;
 
@@ -86,6 +90,9 @@ pub(crate) struct RigidAggregation<C: Coord> {
     az: Vec<C>,
     /// Per aggregate, Σ m x and Σ m (scratch of the levers).
     centres: Vec<[f64; 4]>,
+    /// Per coordinate, Σ B_e over its springs to other aggregates (scratch of the spring-form Galerkin
+    /// product, symmetric: xx, yy, zz, xy, xz, yz).
+    across: Vec<[f64; 6]>,
     /// Coarse factorisations so far.
     pub factorizations: usize,
 }
@@ -138,6 +145,27 @@ fn add_galerkin(
     }
 }
 
+/// out += Rᵀ B R for one coordinate's R = [S(l) | I] (rotations first) and a symmetric B:
+/// [[SᵀBS, SᵀB], [BS, B]].
+#[inline]
+fn add_galerkin_block(out: &mut Block6, l: [f64; 3], b: &[[f64; 3]; 3]) {
+    let s = skew(l);
+    let mut bs = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for c in 0..3 {
+            bs[r][c] = b[r][0] * s[0][c] + b[r][1] * s[1][c] + b[r][2] * s[2][c];
+        }
+    }
+    for p in 0..3 {
+        for q in 0..3 {
+            out[p][q] += s[0][p] * bs[0][q] + s[1][p] * bs[1][q] + s[2][p] * bs[2][q];
+            out[p][q + 3] += bs[q][p];
+            out[p + 3][q] += bs[p][q];
+            out[p + 3][q + 3] += b[p][q];
+        }
+    }
+}
+
 impl<C: Coord> Clone for RigidAggregation<C> {
     /// A clone starts unbuilt (faer's factor cannot be cloned): its first solve builds the coarse
     /// matrix from the A of that moment, where the original may still use the one of the step's first
@@ -176,6 +204,7 @@ impl<C: Coord> RigidAggregation<C> {
             y: Vec::new(),
             az: Vec::new(),
             centres: Vec::new(),
+            across: Vec::new(),
             factorizations: 0,
         }
     }
@@ -420,7 +449,9 @@ impl<C: Coord> RigidAggregation<C> {
     /// rotations (Rᵢ − R_j = [S(x_i − x_j) | 0]); a spring between two aggregates Rᵢᵀ B Rᵢ and R_jᵀ B R_j
     /// on their diagonals and −Rᵢᵀ B R_j between them. The same matrix as [`Self::galerkin_blocks`] up
     /// to round-off, in about half the time (no 3 × 3 block products, and none of the cancellation
-    /// between a spring's diagonal and pair terms inside an aggregate).
+    /// between a spring's diagonal and pair terms inside an aggregate). A spring between aggregates adds
+    /// its B to a per-coordinate sum, and each coordinate's Rᵢᵀ (Σ B) Rᵢ is added once: a sixth less
+    /// set-up on the standard sheet than one Rᵢᵀ B Rᵢ per spring end.
     fn galerkin_springs(&mut self, a: &SystemMatrix<C>, masses: &[f64]) {
         let per = self.per;
         let comps =
@@ -445,6 +476,10 @@ impl<C: Coord> RigidAggregation<C> {
                     }
                 }
             }
+        }
+        if per == MAX_PER {
+            self.across.clear();
+            self.across.resize(masses.len(), [0.0; 6]);
         }
         for (e, &super::SpringBlock { i, j, u, a: s }) in a.springs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
@@ -482,16 +517,18 @@ impl<C: Coord> RigidAggregation<C> {
                 }
                 continue;
             }
-            // Rᵀu for each end, then Rᵢᵀ B Rᵢ and R_jᵀ B R_j on the diagonals and −Rᵢᵀ B R_j between.
-            let (li, lj) = (self.lever[i], self.lever[j]);
-            let (vi, vj) = (modes_of(li, u), modes_of(lj, u));
-            if gi != NONE {
-                add_galerkin(&mut self.d_blocks[gi as usize], li, li, &vi, &vi, s, 1.0);
-            }
-            if gj != NONE {
-                add_galerkin(&mut self.d_blocks[gj as usize], lj, lj, &vj, &vj, s, 1.0);
+            // B summed per end for Rᵢᵀ (Σ B) Rᵢ on the diagonals (below), and −Rᵢᵀ B R_j between.
+            let b =
+                [u[0] * u[0] + s, u[1] * u[1] + s, u[2] * u[2] + s, u[0] * u[1], u[0] * u[2], u[1] * u[2]];
+            for k in [i, j] {
+                let sum = &mut self.across[k];
+                for c in 0..6 {
+                    sum[c] += b[c];
+                }
             }
             if gi != NONE && gj != NONE {
+                let (li, lj) = (self.lever[i], self.lever[j]);
+                let (vi, vj) = (modes_of(li, u), modes_of(lj, u));
                 let o = &mut self.o_blocks[self.pair_of[e] as usize];
                 // The coarse pair is stored as (lower aggregate, higher aggregate).
                 if self.flip[e] {
@@ -499,6 +536,16 @@ impl<C: Coord> RigidAggregation<C> {
                 } else {
                     add_galerkin(o, li, lj, &vi, &vj, s, -1.0);
                 }
+            }
+        }
+        if per == MAX_PER {
+            for (i, c) in self.across.iter().enumerate() {
+                let g = self.agg[i];
+                if g == NONE || c.iter().all(|&v| v == 0.0) {
+                    continue;
+                }
+                let b = [[c[0], c[3], c[4]], [c[3], c[1], c[5]], [c[4], c[5], c[2]]];
+                add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &b);
             }
         }
     }

@@ -336,6 +336,19 @@ impl<C: Coord> ImplicitWorkspace<C> {
             if largest == 0.0 {
                 break;
             }
+            // A contracted update ends the iterations, and it is taken whole, without the line search's
+            // evaluation: the search guards against the overshoots of stiff springs far from the
+            // solution, which an update a third of the one before does not make. On the standard sheet
+            // (N = 64, 1/60 s) the search still halved some final updates (the M⁻¹-norm residual rises
+            // with good steps in the soft directions): without it the RMS error went from 34.2 to
+            // 31.9 mm (the centre of mass from 13.3 to 3.4 mm, within its chaotic spread), and a step
+            // saves a force evaluation, 7 % of its time.
+            if contracted && contacts.is_none() {
+                for i in 0..n {
+                    next.v[i] += self.delta[i];
+                }
+                break;
+            }
             // The line search; not when a contact changed its regime, since the residual it measures then
             // jumps with the constraints, not with the step.
             self.trial.copy_from_slice(&next.v);
