@@ -20,7 +20,10 @@ use crate::repo::Repo;
 #[derive(Debug, Clone, Copy)]
 struct Point {
     knob: f64,
+    /// Wall time: the median of [`REPEATS`] runs when one run takes less than [`REPEAT_BELOW_S`].
     seconds: f64,
+    /// The fastest and slowest of those runs (both `seconds` for a run timed once).
+    seconds_range: (f64, f64),
     error: f64,
     /// Distance of the final centre of mass from the reference value of `benchmarks.md`, m.
     com_error: f64,
@@ -139,7 +142,34 @@ fn reference(repo: &Repo, scene: &BenchSheet) -> Result<Vec<DVec3>> {
 fn measure(scene: &BenchSheet, knob: f64, seconds: f64, x: &[DVec3], reference: &[DVec3]) -> Point {
     let com = scene.spec.build().centre_of_mass(x);
     let com_error = scene.com_reference.map_or(f64::NAN, |r| com.distance(r));
-    Point { knob, seconds, error: rms(x, reference), com_error }
+    Point { knob, seconds, seconds_range: (seconds, seconds), error: rms(x, reference), com_error }
+}
+
+/// Runs shorter than this are timed [`REPEATS`] times (on a shared machine one short run can be a tenth
+/// off); longer ones once, since the sweep would otherwise take hours.
+const REPEAT_BELOW_S: f64 = 1.0;
+
+/// Timings of a short run: the median is reported, with the fastest and slowest.
+const REPEATS: usize = 5;
+
+/// Runs a sheet as [`run_sheet`] does; a run shorter than [`REPEAT_BELOW_S`] is repeated (the same
+/// bits each time) and its wall time is the median of [`REPEATS`], with their range.
+fn timed_run(
+    scene: &BenchSheet,
+    integrator: Integrator,
+    solver: Option<LinearSolver>,
+    control: StepControl,
+) -> Option<(Vec<DVec3>, f64, (f64, f64))> {
+    let (x, first) = run_sheet(scene, integrator, solver, control)?;
+    if first >= REPEAT_BELOW_S {
+        return Some((x, first, (first, first)));
+    }
+    let mut times = vec![first];
+    for _ in 1..REPEATS {
+        times.push(run_sheet(scene, integrator, solver, control)?.1);
+    }
+    times.sort_by(f64::total_cmp);
+    Some((x, times[times.len() / 2], (times[0], times[times.len() - 1])))
 }
 
 fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
@@ -213,16 +243,18 @@ fn sheet_curves(repo: &Repo, scene: &BenchSheet, quick: bool) -> Result<(Vec<Cur
             if quick && knob < 5e-5 {
                 continue;
             }
-            if let Some((x, seconds)) = run_sheet(scene, integrator, solver, control) {
-                points.push(measure(scene, knob, seconds, &x, &reference));
+            if let Some((x, seconds, range)) = timed_run(scene, integrator, solver, control) {
+                points.push(Point { seconds_range: range, ..measure(scene, knob, seconds, &x, &reference) });
             }
         }
         curve.points = points;
         curve.largest_stable = (!integrator.is_adaptive() && !integrator.is_implicit() && !quick)
             .then(|| largest_stable_step(scene, integrator));
         curve.at_largest = curve.largest_stable.and_then(|dt| {
-            run_sheet(scene, integrator, None, StepControl::Constant { dt })
-                .map(|(x, secs)| measure(scene, dt, secs, &x, &reference))
+            timed_run(scene, integrator, None, StepControl::Constant { dt }).map(|(x, secs, range)| Point {
+                seconds_range: range,
+                ..measure(scene, dt, secs, &x, &reference)
+            })
         });
         curves.push(curve);
     }
@@ -297,6 +329,7 @@ fn mass_spring_curves() -> Vec<Curve> {
                     (error.is_finite() && error < 10.0).then_some(Point {
                         knob,
                         seconds,
+                        seconds_range: (seconds, seconds),
                         error,
                         com_error: f64::NAN,
                     })
@@ -514,10 +547,10 @@ fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
         for (what, p) in rows {
             let _ = writeln!(
                 out,
-                "| {} | {:.2e} ({what}) | {:.3} s | {:.2} mm | {:.2} mm |",
+                "| {} | {:.2e} ({what}) | {} | {:.2} mm | {:.2} mm |",
                 c.label(),
                 p.knob,
-                p.seconds,
+                wall(&p),
                 p.com_error * 1e3,
                 p.error * 1e3
             );
@@ -535,6 +568,12 @@ fn peer_table(scene: &BenchSheet, curves: &[Curve]) -> String {
     out
 }
 
+/// A wall time, with its range when it is the median of several runs.
+fn wall(p: &Point) -> String {
+    let (lo, hi) = p.seconds_range;
+    if lo == hi { format!("{:.3} s", p.seconds) } else { format!("{:.3} s ({lo:.3}–{hi:.3})", p.seconds) }
+}
+
 fn peers_section(tables: &str) -> String {
     let mut out = String::from(
         "## The standard sheet beside other simulators\n\nWhat other simulators measured for 1 simulated second when \
@@ -546,7 +585,8 @@ fn peers_section(tables: &str) -> String {
         let _ = writeln!(out, "| {name} | {a} | {b} | {e} |");
     }
     out.push_str(
-        "\nanima's numbers below are single-threaded and f64, timed in this run. The centre-of-mass error is the \
+        "\nanima's numbers below are single-threaded and f64, timed in this run; a run shorter than a second is \
+         timed five times, and its median is given with the fastest and slowest in brackets. The centre-of-mass error is the \
          distance from the reference centre of mass in `benchmarks.md`.\n\n",
     );
     out.push_str(tables);

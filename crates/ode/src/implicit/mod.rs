@@ -194,10 +194,11 @@ impl LinearSolver {
 
     /// The rigid-aggregation preconditioned CG with the tolerance generalised-α's Newton iterations
     /// need: a relative residual of 0.1 per Newton iteration, at most 200 iterations. Measured on the
-    /// standard sheet at 1/60 s with two Newton iterations: 0.1 errs 6.5 mm at the centre of mass
-    /// (34 mm RMS) with 8.4 CG iterations per step, 0.05 14 mm (31 mm) with 12.1, 0.03 13 mm (29 mm)
-    /// with 14.5; with three, 0.2 saves a third of the iterations but let the very stiff sheet of the
-    /// hard cases swing up.
+    /// standard sheet at 1/60 s with two Newton iterations: 0.1 errs 8.0 mm at the centre of mass
+    /// (47 mm RMS) with 9.5 CG iterations per step, 0.05 14 mm (32 mm) with 13.3, 0.03 13 mm (29 mm)
+    /// with 16.0; the default (at most three, ending on contraction) 5.8 mm (23 mm) with 10.1. With
+    /// three, 0.2 saves a third of the iterations but let the very stiff sheet of the hard cases swing
+    /// up.
     #[cfg(feature = "sparse-cholesky")]
     pub const fn default_aggregation() -> Self {
         LinearSolver::RigidAggregation { tolerance: 0.1, max_iterations: 200 }
