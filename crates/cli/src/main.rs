@@ -505,7 +505,14 @@ fn describe(scene: &Scene) -> String {
 
 /// The summary's main numbers on standard error.
 fn report(s: &Summary) {
-    eprintln!("anima: {} steps, {} frames in {:.2} s", s.steps, s.frames, s.wall_seconds);
+    eprintln!(
+        "anima: {} steps, {} frames in {:.2} s ({:.2} s simulating, {:.2} s writing output)",
+        s.steps,
+        s.frames,
+        s.wall_seconds,
+        s.wall_seconds - s.output_seconds,
+        s.output_seconds
+    );
     if let Some(n) = s.self_intersections {
         eprintln!("anima: self-intersections: {n} crossing edge–triangle pairs at the worst frame");
     }

@@ -128,6 +128,20 @@ fn genes() -> &'static [Gene] {
         // The acrobat's landing alone, for a controller whose pusher E4 has no feedback.
         Ok("landing") => &STAND_GENES[..STAND_GENES.len() - 2],
         Ok("flight") => FLIGHT_GENES,
+        // The flight and the landing's feedback gains together.
+        Ok("flight-landing") => {
+            static BOTH: std::sync::OnceLock<Vec<Gene>> = std::sync::OnceLock::new();
+            BOTH.get_or_init(|| {
+                let gains = STAND_GENES
+                    .iter()
+                    .filter(|g| g.labels[0].contains("/E8/acrobat/") && g.labels[0].contains("/k"));
+                FLIGHT_GENES
+                    .iter()
+                    .chain(gains)
+                    .map(|g| Gene { labels: g.labels, lo: g.lo, hi: g.hi })
+                    .collect()
+            })
+        }
         _ => GENES,
     }
 }
@@ -180,8 +194,9 @@ fn score(c: Controller, spacing: f64) -> f64 {
         ];
         let d = ((a.body_position[f][0] - h[0]).powi(2) + (a.body_position[f][1] - h[1]).powi(2)).sqrt();
         d_min = d_min.min(d);
-    })
-    .expect("backflip");
+    });
+    // A candidate whose gains drive the bodies to non-finite values scores below any that runs.
+    let Ok(out) = out else { return -100.0 };
     let mut s = 2.0 * out.iterations as f64 / N as f64;
     // The pusher must stay up too: a fall costs more than standing earns.
     if out.pusher_fell {

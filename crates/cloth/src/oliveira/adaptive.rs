@@ -129,6 +129,9 @@ pub struct RemeshStats {
     /// Oliveira: simplification components not attempted because none of their vertices may be
     /// removed, so that no patch could have fewer faces (see [`AdaptiveMesh::removable_vertices`]).
     pub simplifications_skipped: u64,
+    /// Oliveira: refinement patches refused because they had no more faces than the region they would
+    /// replace (`OliveiraRemeshing::refuse_idle_refinement`; the region is left as it was).
+    pub refinements_refused: u64,
     /// Components whose remeshing was refused (pinched border, locked vertex inside, mesher failure).
     pub failures: u64,
     /// New particles found inside an object and pushed out.
@@ -510,15 +513,22 @@ fn oliveira_pass(
         // (anima's guard): a flat region would otherwise be regenerated, at the same size, after every
         // pass. With `delay_refused_simplification` its edges then wait t_simp before they are
         // selected again, as refined edges do.
-        let before = (!refining).then(|| (mesh.clone(), mesh.n_faces()));
+        // Likewise a refinement that does not raise it (`refuse_idle_refinement`).
+        let guarded = !refining || p.refuse_idle_refinement;
+        let before = guarded.then(|| (mesh.clone(), mesh.n_faces()));
         let result = mesh.remesh_region(faces, &settings);
         let refused = match (&result, &before) {
+            (Ok(_), Some((_, n_before))) if refining => mesh.n_faces() <= *n_before,
             (Ok(_), Some((_, n_before))) => mesh.n_faces() >= *n_before,
             _ => false,
         };
         if refused {
-            *mesh = before.expect("kept for simplification").0;
-            stats.simplifications_refused += 1;
+            *mesh = before.expect("kept for the guard").0;
+            if refining {
+                stats.refinements_refused += 1;
+            } else {
+                stats.simplifications_refused += 1;
+            }
         }
         if !refining && (refused || result.is_err()) && p.delay_refused_simplification {
             for k in face_edge_keys(mesh, faces) {
@@ -863,6 +873,43 @@ mod tests {
         assert!(c.stats().refinements > 0);
         assert!(shortest >= p.min_rest_length - 1e-12, "shortest rest edge {shortest}");
         c.adaptive_mesh().unwrap().check_invariants().unwrap();
+    }
+
+    /// Folding passes over a 9 × 9 sheet, as above, with L⁰_min = 9 cm: after the first refinement the
+    /// fold's edges (about 9–12 cm) stay selected, but a patch inside the short-edge rule can only have
+    /// the faces the region had. Returns the refinements refused as idle, and the passes that counted
+    /// a refinement without adding a face (an equal patch put in place of the region).
+    fn folding_at_the_limit(refuse_idle_refinement: bool) -> (u64, usize) {
+        let p = OliveiraRemeshing {
+            short_edge: ShortEdgeRule::MinLength,
+            simplify: false,
+            min_rest_length: 0.09,
+            max_rest_length: 0.13,
+            refuse_idle_refinement,
+            ..OliveiraRemeshing::test_3()
+        };
+        let mut c = adaptive(9, false, AdaptiveMethod::Oliveira(p));
+        let mut idle_accepted = 0;
+        for _ in 0..6 {
+            fold(&mut c);
+            let (refinements, faces) = (c.stats().refinements, c.cloth().mesh().n_faces());
+            c.remesh();
+            if c.stats().refinements > refinements && c.cloth().mesh().n_faces() <= faces {
+                idle_accepted += 1;
+            }
+            c.adaptive_mesh().unwrap().check_invariants().unwrap();
+        }
+        (c.stats().refinements_refused, idle_accepted)
+    }
+
+    #[test]
+    fn a_region_refined_to_the_limit_is_left_as_it_is() {
+        let (refused, idle_accepted) = folding_at_the_limit(true);
+        assert!(refused > 0, "no refinement was refused as idle");
+        assert_eq!(idle_accepted, 0, "a pass put an equal patch in place of a region");
+        let (refused, idle_accepted) = folding_at_the_limit(false);
+        assert_eq!(refused, 0);
+        assert!(idle_accepted > 0, "without the guard the idle patches are taken");
     }
 
     /// Deepest point of the sphere of `sphere_scene` reached by any edge's midpoint, m.

@@ -367,6 +367,7 @@ fn run_figures<F: Figures>(
         frames: frames.len(),
         simulated_seconds: steps as f64 * settings.dt,
         wall_seconds,
+        output_seconds: picture_seconds,
         all_finite,
         error,
         warnings,

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use super::export::GltfExport;
 use super::{
-    CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
+    CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
     stability_warning,
 };
 use crate::output::write_atomic;
@@ -136,16 +136,27 @@ pub fn run(
     // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
     let triangles = world.all_triangles();
     let mut watch = CrossingWatch::default();
+    let mut output = OutputClock::default();
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target, progress) {
             failure = Some(e);
             break;
         }
-        write_frame(opts, &world, k)?;
-        if let Some(e) = &mut export {
-            e.deforming_frame(k, world.time(), |s| world.surface_positions(s));
-        }
+        output.time(|| -> Result<()> {
+            write_frame(opts, &world, k)?;
+            if let Some(e) = &mut export {
+                e.deforming_frame(k, world.time(), |s| world.surface_positions(s));
+            }
+            if shown.contains(&k) {
+                snapshots.push(Snapshot {
+                    frame: k,
+                    time: world.time(),
+                    positions: world.positions().to_vec(),
+                });
+            }
+            Ok(())
+        })?;
         watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
         frame_stats.push(FrameStats {
@@ -156,12 +167,10 @@ pub fn run(
             bounds_min: d.bounds.min.to_array(),
             bounds_max: d.bounds.max.to_array(),
         });
-        if shown.contains(&k) {
-            snapshots.push(Snapshot { frame: k, time: world.time(), positions: world.positions().to_vec() });
-        }
         frames_done = k;
     }
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
+    let output_seconds = output.seconds();
     progress.end();
     watch.look(world.positions(), &triangles);
     let d = world.diagnostics();
@@ -180,6 +189,7 @@ pub fn run(
         frames: frames_done,
         simulated_seconds: world.time(),
         wall_seconds,
+        output_seconds,
         all_finite: !failure.as_ref().is_some_and(StepError::is_non_finite) && d.all_finite,
         error: failure.as_ref().map(|e| e.to_string()),
         warnings,
@@ -188,7 +198,8 @@ pub fn run(
             integrator: scene.integrator.name().to_owned(),
             dt: scene.dt_s,
             particles,
-            ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * particles.max(1)) as f64,
+            ns_per_particle_step: (wall_seconds - output_seconds) * 1e9
+                / (steps.max(1) * particles.max(1)) as f64,
             non_finite: match &failure {
                 Some(StepError::NonFinite(e)) => Some(NonFiniteReport::from(e)),
                 _ => None,

@@ -159,6 +159,9 @@ pub struct Summary {
     pub simulated_seconds: f64,
     /// Wall time of the step loop (frames and pictures included, start-up not), s.
     pub wall_seconds: f64,
+    /// Of `wall_seconds`, the time spent writing frames and exports and keeping the pictures' states,
+    /// s; the rest is the simulation's.
+    pub output_seconds: f64,
     /// Every value stayed finite.
     pub all_finite: bool,
     /// Why the run stopped early, if it did.
@@ -189,6 +192,27 @@ impl CrossingWatch {
     }
 
     /// Seconds spent counting.
+    pub fn seconds(&self) -> f64 {
+        self.spent.as_secs_f64()
+    }
+}
+
+/// Time spent on output inside a step loop (frames, exports, the pictures' states), kept apart so that
+/// a run can say how long the simulation itself took.
+#[derive(Debug, Default)]
+pub(crate) struct OutputClock {
+    spent: std::time::Duration,
+}
+
+impl OutputClock {
+    /// Runs `f`, counting its time as output.
+    pub fn time<T>(&mut self, f: impl FnOnce() -> T) -> T {
+        let started = std::time::Instant::now();
+        let out = f();
+        self.spent += started.elapsed();
+        out
+    }
+
     pub fn seconds(&self) -> f64 {
         self.spent.as_secs_f64()
     }

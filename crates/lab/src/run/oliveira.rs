@@ -17,7 +17,9 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::{CrossingWatch, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames};
+use super::{
+    CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
+};
 use crate::oliveira::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
 
@@ -83,6 +85,7 @@ pub fn run(
     let mut kept: Vec<Kept> = Vec::new();
     let mut write_error = None;
     let mut watch = CrossingWatch::default();
+    let mut output = OutputClock::default();
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
     let mut too_long = false;
@@ -96,25 +99,30 @@ pub fn run(
         max_dt = max_dt.max(report.dt);
         let t = c.cloth().time();
         while next_frame <= n_frames && t >= frame_time(next_frame) - 1e-12 {
-            if let Err(e) = write_frame(opts, c, next_frame) {
+            let written = output.time(|| {
+                write_frame(opts, c, next_frame)?;
+                if let Some(e) = &mut export {
+                    // The frame's own time: the state is that of the first step to reach it, as in the
+                    // OBJ frames (a long step may reach two frame times at once).
+                    export_frame(e, c, next_frame, frame_time(next_frame));
+                }
+                if opts.picture_dir().is_some() && shown.contains(&next_frame) {
+                    kept.push((t, c.cloth().positions().to_vec(), c.cloth().triangles().to_vec()));
+                }
+                Ok(())
+            });
+            if let Err(e) = written {
                 write_error = Some(e);
                 return ControlFlow::Break(());
             }
-            if let Some(e) = &mut export {
-                // The frame's own time: the state is that of the first step to reach it, as in the
-                // OBJ frames (a long step may reach two frame times at once).
-                export_frame(e, c, next_frame, frame_time(next_frame));
-            }
             watch.look(c.cloth().positions(), c.cloth().triangles());
-            if opts.picture_dir().is_some() && shown.contains(&next_frame) {
-                kept.push((t, c.cloth().positions().to_vec(), c.cloth().triangles().to_vec()));
-            }
             progress.advance((t * 1e3) as u64);
             next_frame += 1;
         }
         ControlFlow::Continue(())
     });
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
+    let output_seconds = output.seconds();
     progress.end();
     if let Some(e) = write_error {
         return Err(e);
@@ -136,6 +144,7 @@ pub fn run(
         frames: next_frame - 1,
         simulated_seconds: c.time(),
         wall_seconds,
+        output_seconds,
         all_finite: !matches!(ended, Ended::Failed(_)),
         error: match &ended {
             Ended::Failed(e) => Some(e.to_string()),

@@ -16,7 +16,9 @@ use anyhow::{Result, bail};
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::{CrossingWatch, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
+use super::{
+    CrossingWatch, Detail, OutputClock, Progress, RunOptions, Summary, sheet_frames, stability_warning,
+};
 use crate::output::write_atomic;
 
 /// The numbers of a sheet run.
@@ -117,6 +119,7 @@ pub fn run(
     let mut error = None;
     let mut diverged = false;
     let mut watch = CrossingWatch::default();
+    let mut output = OutputClock::default();
     let mut frames = 0;
     if scene.integrator.is_adaptive() {
         // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
@@ -163,22 +166,26 @@ pub fn run(
                 break;
             }
             frames = k;
-            if let Some(e) = &mut export {
-                e.deforming_frame(k, sim.time(), |_| &sim.state().x[..]);
-            }
             watch.look(&sim.state().x, &triangles);
             progress.advance(sim.steps_taken() as u64);
-            if let Some(dir) = opts.frame_dir() {
-                write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
-                    Ok(write_obj(w, "sheet", &sim.state().x, &triangles)?)
-                })?;
-            }
-            if opts.picture_dir().is_some() && shown.contains(&k) {
-                snapshots.push((k, sim.time(), sim.state().x.clone()));
-            }
+            output.time(|| -> Result<()> {
+                if let Some(e) = &mut export {
+                    e.deforming_frame(k, sim.time(), |_| &sim.state().x[..]);
+                }
+                if let Some(dir) = opts.frame_dir() {
+                    write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
+                        Ok(write_obj(w, "sheet", &sim.state().x, &triangles)?)
+                    })?;
+                }
+                if opts.picture_dir().is_some() && shown.contains(&k) {
+                    snapshots.push((k, sim.time(), sim.state().x.clone()));
+                }
+                Ok(())
+            })?;
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
+    let output_seconds = output.seconds();
     progress.end();
     let x = &sim.state().x;
     watch.look(x, &triangles);
@@ -196,6 +203,7 @@ pub fn run(
         frames,
         simulated_seconds: sim.time(),
         wall_seconds,
+        output_seconds,
         all_finite: !diverged && sim.state().first_non_finite().is_none(),
         error,
         warnings,
@@ -210,7 +218,7 @@ pub fn run(
             particles: n,
             springs: n_springs,
             triangles: n_triangles,
-            ns_per_particle_step: wall_seconds * 1e9 / (steps.max(1) * n) as f64,
+            ns_per_particle_step: (wall_seconds - output_seconds) * 1e9 / (steps.max(1) * n) as f64,
             threads,
             center_of_mass: sim.centre_of_mass(x).to_array(),
             rms_to_reference: opts.reference.as_ref().map(|r| {

@@ -145,23 +145,35 @@ fn add_galerkin(
     }
 }
 
-/// out += Rᵀ B R for one coordinate's R = [S(l) | I] (rotations first) and a symmetric B:
-/// [[SᵀBS, SᵀB], [BS, B]].
+/// Rᵢᵀ B R_j for R = [S(l) | I] (rotations first) with levers lᵢ, l_j: [[SᵢᵀBS_j, SᵢᵀB], [BS_j, B]].
 #[inline]
-fn add_galerkin_block(out: &mut Block6, l: [f64; 3], b: &[[f64; 3]; 3]) {
-    let s = skew(l);
+fn galerkin3(li: [f64; 3], b: &[[f64; 3]; 3], lj: [f64; 3]) -> Block6 {
+    let mut out = [[0.0; MAX_PER]; MAX_PER];
+    let (si, sj) = (skew(li), skew(lj));
     let mut bs = [[0.0; 3]; 3];
     for r in 0..3 {
         for c in 0..3 {
-            bs[r][c] = b[r][0] * s[0][c] + b[r][1] * s[1][c] + b[r][2] * s[2][c];
+            bs[r][c] = b[r][0] * sj[0][c] + b[r][1] * sj[1][c] + b[r][2] * sj[2][c];
         }
     }
     for p in 0..3 {
         for q in 0..3 {
-            out[p][q] += s[0][p] * bs[0][q] + s[1][p] * bs[1][q] + s[2][p] * bs[2][q];
-            out[p][q + 3] += bs[q][p];
-            out[p + 3][q] += bs[p][q];
-            out[p + 3][q + 3] += b[p][q];
+            out[p][q] = si[0][p] * bs[0][q] + si[1][p] * bs[1][q] + si[2][p] * bs[2][q];
+            out[p][q + 3] = si[0][p] * b[0][q] + si[1][p] * b[1][q] + si[2][p] * b[2][q];
+            out[p + 3][q] = bs[p][q];
+            out[p + 3][q + 3] = b[p][q];
+        }
+    }
+    out
+}
+
+/// out += Rᵀ B R for one coordinate's R = [S(l) | I] and a symmetric B.
+#[inline]
+fn add_galerkin_block(out: &mut Block6, l: [f64; 3], b: &[[f64; 3]; 3]) {
+    let m = galerkin3(l, b, l);
+    for p in 0..MAX_PER {
+        for q in 0..MAX_PER {
+            out[p][q] += m[p][q];
         }
     }
 }
@@ -317,28 +329,13 @@ impl<C: Coord> RigidAggregation<C> {
     /// Rᵢᵀ B R_j for the modes of coordinates i and j (R = [S | I], rotations first, in 3-D).
     #[inline]
     fn galerkin(&self, i: usize, b: C::Block, j: usize) -> Block6 {
-        let mut out = [[0.0; MAX_PER]; MAX_PER];
         if self.per == 1 {
+            let mut out = [[0.0; MAX_PER]; MAX_PER];
             out[0][0] = C::block_entry(b, 0, 0);
             return out;
         }
         let b: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| C::block_entry(b, r, c)));
-        let (si, sj) = (skew(self.lever[i]), skew(self.lever[j]));
-        let mut bs = [[0.0; 3]; 3];
-        for r in 0..3 {
-            for c in 0..3 {
-                bs[r][c] = b[r][0] * sj[0][c] + b[r][1] * sj[1][c] + b[r][2] * sj[2][c];
-            }
-        }
-        for p in 0..3 {
-            for q in 0..3 {
-                out[p][q] = si[0][p] * bs[0][q] + si[1][p] * bs[1][q] + si[2][p] * bs[2][q];
-                out[p][q + 3] = si[0][p] * b[0][q] + si[1][p] * b[1][q] + si[2][p] * b[2][q];
-                out[p + 3][q] = bs[p][q];
-                out[p + 3][q + 3] = b[p][q];
-            }
-        }
-        out
+        galerkin3(self.lever[i], &b, self.lever[j])
     }
 
     /// Builds the coarse matrix Rᵀ A R for the current A and positions `x`, and factorises it (the

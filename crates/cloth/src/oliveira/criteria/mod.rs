@@ -81,6 +81,14 @@ pub struct OliveiraRemeshing {
     /// selected again (anima's; on). Off, a region that cannot coarsen is regenerated and refused at
     /// every pass, as before.
     pub delay_refused_simplification: bool,
+    /// A refinement patch with no more faces than the region it replaces is refused and the region
+    /// restored (anima's; on). Near L⁰_min the mesher, held back by the short-edge rule, can only
+    /// regenerate a region at the size it has, while the criteria keep selecting it: every pass then
+    /// replaced it by an equal patch, re-interpolating its particles from the old faces. On Test II's
+    /// round table (short edges ≥ L⁰_min, RK4) that happened about once a millisecond at the table's
+    /// rim, and the cloth crept off the tabletop and fell past it by 0.8 s; with the guard it stays
+    /// on the table, as the uniform meshes and the thesis's figures do.
+    pub refuse_idle_refinement: bool,
     /// Time between remeshing passes, s; 0 remeshes after every step as the thesis does (Fig. 4.1).
     pub interval_s: f64,
     /// cast every edge that may no longer be refined (L⁰ < L⁰_min) at the end of each step and
@@ -108,6 +116,7 @@ impl OliveiraRemeshing {
             improvement_rounds: 3,
             simplify: true,
             delay_refused_simplification: true,
+            refuse_idle_refinement: true,
             interval_s: 0.0,
             repel_unrefinable_edges: true,
         }
