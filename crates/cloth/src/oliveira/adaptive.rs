@@ -149,6 +149,11 @@ enum Engine {
         mesh: AdaptiveMesh,
         params: OliveiraRemeshing,
         refined_at: BTreeMap<(u32, u32), f64>,
+        /// Refinement components (their faces) refused as idle, and those the mesher could not fill,
+        /// since the mesh last changed: the same region of the same rest mesh gives the same patch, so
+        /// it is not remeshed again until the mesh changes.
+        idle: Vec<Vec<u32>>,
+        failed: Vec<Vec<u32>>,
     },
     Subdivision {
         sub: Subdivision,
@@ -197,7 +202,13 @@ impl AdaptiveCloth {
         let (engine, interval) = match method {
             AdaptiveMethod::Static => (Engine::Static { locked: Vec::new() }, f64::INFINITY),
             AdaptiveMethod::Oliveira(params) => (
-                Engine::Oliveira { mesh: adaptive_mesh(&cloth), params, refined_at: BTreeMap::new() },
+                Engine::Oliveira {
+                    mesh: adaptive_mesh(&cloth),
+                    params,
+                    refined_at: BTreeMap::new(),
+                    idle: Vec::new(),
+                    failed: Vec::new(),
+                },
                 params.interval_s,
             ),
             AdaptiveMethod::Subdivision(params) => (
@@ -294,9 +305,12 @@ impl AdaptiveCloth {
                     locked.push(vertex);
                 }
             }
-            Engine::Oliveira { mesh, .. } | Engine::Sizing { mesh, .. } => {
+            Engine::Oliveira { mesh, idle, failed, .. } => {
+                idle.clear();
+                failed.clear();
                 mesh.set_locked(vertex as u32, true)
             }
+            Engine::Sizing { mesh, .. } => mesh.set_locked(vertex as u32, true),
             Engine::Subdivision { sub, locked_slots, .. } => {
                 let slot = (0..sub.rest().len() as u32)
                     .filter(|&s| sub.is_vertex_alive(s))
@@ -337,9 +351,15 @@ impl AdaptiveCloth {
         self.stats.passes += 1;
         let changed = match &mut self.engine {
             Engine::Static { .. } => false,
-            Engine::Oliveira { mesh, params, refined_at } => {
-                let changed =
-                    oliveira_pass(&mut self.cloth, mesh, params, refined_at, self.gravity, &mut self.stats);
+            Engine::Oliveira { mesh, params, refined_at, idle, failed } => {
+                let changed = oliveira_pass(
+                    &mut self.cloth,
+                    mesh,
+                    params,
+                    Memory { refined_at, idle, failed },
+                    self.gravity,
+                    &mut self.stats,
+                );
                 if changed {
                     repel_unrefinable_edges(&mut self.cloth, params);
                 }
@@ -457,12 +477,20 @@ fn rebuild_from_adaptive(
     true
 }
 
+/// What the thesis's remesher keeps between passes besides the mesh: when each edge was made by a
+/// refinement, and the refinement regions that came to nothing since the mesh last changed.
+struct Memory<'a> {
+    refined_at: &'a mut BTreeMap<(u32, u32), f64>,
+    idle: &'a mut Vec<Vec<u32>>,
+    failed: &'a mut Vec<Vec<u32>>,
+}
+
 /// One pass of the thesis's remesher (Fig. 4.7, spec §3.2 and §6.8).
 fn oliveira_pass(
     cloth: &mut OliveiraCloth,
     mesh: &mut AdaptiveMesh,
     p: &OliveiraRemeshing,
-    refined_at: &mut BTreeMap<(u32, u32), f64>,
+    Memory { refined_at, idle, failed }: Memory<'_>,
     gravity: DVec3,
     stats: &mut RemeshStats,
 ) -> bool {
@@ -504,6 +532,15 @@ fn oliveira_pass(
             .map(|(a, b)| (a.min(b), a.max(b)))
             .collect();
         let first_new_face = mesh.log().added_faces.len();
+        // Refused as idle or unfillable at an earlier pass, and the mesh has not changed since.
+        if refining && p.refuse_idle_refinement && idle.contains(faces) {
+            stats.refinements_refused += 1;
+            continue;
+        }
+        if refining && failed.contains(faces) {
+            stats.failures += 1;
+            continue;
+        }
         if !refining && mesh.removable_vertices(faces, settings.contour, p.max_rest_length).is_empty() {
             // Nothing here may go within L⁰_max, so no patch can have fewer faces: not an attempt.
             stats.simplifications_skipped += 1;
@@ -526,6 +563,7 @@ fn oliveira_pass(
             *mesh = before.expect("kept for the guard").0;
             if refining {
                 stats.refinements_refused += 1;
+                idle.push(faces.clone());
             } else {
                 stats.simplifications_refused += 1;
             }
@@ -549,13 +587,21 @@ fn oliveira_pass(
             Ok(_) => stats.simplifications += 1,
             Err(_) => {
                 stats.failures += 1;
-                if !refining {
+                if refining {
+                    failed.push(faces.clone());
+                } else {
                     stats.simplifications_failed += 1;
                 }
             }
         }
     }
-    rebuild_from_adaptive(cloth, mesh, Some(refined_at), gravity, stats)
+    let rebuilt = rebuild_from_adaptive(cloth, mesh, Some(refined_at), gravity, stats);
+    if rebuilt {
+        // Renumbered: the remembered regions' faces name other faces now.
+        idle.clear();
+        failed.clear();
+    }
+    rebuilt
 }
 
 /// One pass of the 1-to-4 baseline.
