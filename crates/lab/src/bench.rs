@@ -139,10 +139,20 @@ fn reference(repo: &Repo, scene: &BenchSheet) -> Result<Vec<DVec3>> {
     Ok(x)
 }
 
-fn measure(scene: &BenchSheet, knob: f64, seconds: f64, x: &[DVec3], reference: &[DVec3]) -> Point {
+/// A run's wall time, s: the median, and the fastest and slowest run.
+type Timing = (f64, (f64, f64));
+
+/// A run's point: its wall time and its errors.
+fn measure(
+    scene: &BenchSheet,
+    knob: f64,
+    (seconds, seconds_range): Timing,
+    x: &[DVec3],
+    reference: &[DVec3],
+) -> Point {
     let com = scene.spec.build().centre_of_mass(x);
     let com_error = scene.com_reference.map_or(f64::NAN, |r| com.distance(r));
-    Point { knob, seconds, seconds_range: (seconds, seconds), error: rms(x, reference), com_error }
+    Point { knob, seconds, seconds_range, error: rms(x, reference), com_error }
 }
 
 /// Runs shorter than this are timed [`REPEATS`] times (on a shared machine one short run can be a tenth
@@ -159,17 +169,17 @@ fn timed_run(
     integrator: Integrator,
     solver: Option<LinearSolver>,
     control: StepControl,
-) -> Option<(Vec<DVec3>, f64, (f64, f64))> {
+) -> Option<(Vec<DVec3>, Timing)> {
     let (x, first) = run_sheet(scene, integrator, solver, control)?;
     if first >= REPEAT_BELOW_S {
-        return Some((x, first, (first, first)));
+        return Some((x, (first, (first, first))));
     }
     let mut times = vec![first];
     for _ in 1..REPEATS {
         times.push(run_sheet(scene, integrator, solver, control)?.1);
     }
     times.sort_by(f64::total_cmp);
-    Some((x, times[times.len() / 2], (times[0], times[times.len() - 1])))
+    Some((x, (times[times.len() / 2], (times[0], times[times.len() - 1]))))
 }
 
 fn rms(a: &[DVec3], b: &[DVec3]) -> f64 {
@@ -243,18 +253,16 @@ fn sheet_curves(repo: &Repo, scene: &BenchSheet, quick: bool) -> Result<(Vec<Cur
             if quick && knob < 5e-5 {
                 continue;
             }
-            if let Some((x, seconds, range)) = timed_run(scene, integrator, solver, control) {
-                points.push(Point { seconds_range: range, ..measure(scene, knob, seconds, &x, &reference) });
+            if let Some((x, timing)) = timed_run(scene, integrator, solver, control) {
+                points.push(measure(scene, knob, timing, &x, &reference));
             }
         }
         curve.points = points;
         curve.largest_stable = (!integrator.is_adaptive() && !integrator.is_implicit() && !quick)
             .then(|| largest_stable_step(scene, integrator));
         curve.at_largest = curve.largest_stable.and_then(|dt| {
-            timed_run(scene, integrator, None, StepControl::Constant { dt }).map(|(x, secs, range)| Point {
-                seconds_range: range,
-                ..measure(scene, dt, secs, &x, &reference)
-            })
+            timed_run(scene, integrator, None, StepControl::Constant { dt })
+                .map(|(x, timing)| measure(scene, dt, timing, &x, &reference))
         });
         curves.push(curve);
     }

@@ -150,8 +150,9 @@ enum Engine {
         params: OliveiraRemeshing,
         refined_at: BTreeMap<(u32, u32), f64>,
         /// Refinement components (their faces) refused as idle, and those the mesher could not fill,
-        /// since the mesh last changed: the same region of the same rest mesh gives the same patch, so
-        /// it is not remeshed again until the mesh changes.
+        /// since the mesh last changed. The mesher works in rest space (positions are only
+        /// interpolated), so the same region of the same rest mesh gives the same patch: it is not
+        /// remeshed again until the mesh changes (or a particle is locked).
         idle: Vec<Vec<u32>>,
         failed: Vec<Vec<u32>>,
     },

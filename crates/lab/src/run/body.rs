@@ -16,7 +16,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::{Detail, Progress, RunOptions, Summary};
+use super::{Detail, OutputClock, Progress, RunOptions, Summary};
 use crate::nunes::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
 
@@ -312,7 +312,7 @@ fn run_figures<F: Figures>(
     };
     let mut all_finite = true;
     let mut error = None;
-    let mut picture_seconds = 0.0;
+    let mut pictures = OutputClock::default();
     progress.begin(n_steps);
     let started = Instant::now();
     let mut steps = 0;
@@ -328,9 +328,7 @@ fn run_figures<F: Figures>(
             update_stats(&mut stats[m], s, figures.world().skeleton(m)?, hips[m]);
         }
         if out.is_some() && k % frame_every == 0 {
-            let t0 = Instant::now();
-            picture(figures.world(), frames.len(), &mut frames)?;
-            picture_seconds += t0.elapsed().as_secs_f64();
+            pictures.time(|| picture(figures.world(), frames.len(), &mut frames))?;
         }
         if let Some(e) = &mut export
             && k % frame_every == 0
@@ -345,6 +343,7 @@ fn run_figures<F: Figures>(
         }
     }
     let wall_seconds = started.elapsed().as_secs_f64();
+    let picture_seconds = pictures.seconds();
     progress.end();
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
     let mut warnings = Vec::new();

@@ -159,8 +159,9 @@ pub struct Summary {
     pub simulated_seconds: f64,
     /// Wall time of the step loop (frames and pictures included, start-up not), s.
     pub wall_seconds: f64,
-    /// Of `wall_seconds`, the time spent writing frames and exports and keeping the pictures' states,
-    /// s; the rest is the simulation's.
+    /// Of `wall_seconds`, the time spent on output inside the loop, s: for cloth runs writing frames
+    /// and exports and keeping the pictures' states, for figure runs drawing the pictures (their glTF
+    /// frames are not counted). The rest is the simulation's.
     pub output_seconds: f64,
     /// Every value stayed finite.
     pub all_finite: bool,
@@ -213,6 +214,7 @@ impl OutputClock {
         out
     }
 
+    /// Seconds spent on output.
     pub fn seconds(&self) -> f64 {
         self.spent.as_secs_f64()
     }

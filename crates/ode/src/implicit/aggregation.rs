@@ -50,8 +50,8 @@ const SMOOTHING: f64 = 0.7;
 pub(crate) const RADIUS: usize = 4;
 
 /// Block-Jacobi sweeps before and after the coarse correction. Two sweeps cut the CG iterations by a
-/// third (13.6 → 9.7 per step, measured with radius 3 before the spring-form products) but cost two more products with A per iteration, and
-/// were measured slower per step.
+/// third (13.6 → 9.7 per step, measured with radius 3 before the spring-form products) but cost two
+/// more products with A per iteration, and were measured slower per step.
 pub(crate) const SWEEPS: usize = 1;
 
 /// Coarse unknowns per aggregate, at most.
