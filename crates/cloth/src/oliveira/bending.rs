@@ -41,10 +41,15 @@ pub fn sin_half_angle(n1: DVec3, n2: DVec3, e: DVec3) -> f64 {
 /// The bending mode u₁..u₄ of Eq. 4.10 and, for Eq. 4.11, |e|, |N₁|, |N₂| and sin(θ/2); `None` for a
 /// degenerate element (a zero-length edge, or a triangle of zero area), which then exerts no force.
 ///
+/// `height_floor` (η) bounds the mode of a sliver: when a triangle's |N| is below η|e|² (its height over
+/// the hinge below η|e|) the whole mode is scaled by |N|/(η|e|²), so that neither |u₁| nor |u₂| exceeds 1/(η|e|) and
+/// Σuᵢ = 0, Σxᵢ × uᵢ = 0 still hold (see [`crate::oliveira::Options::bending_height_floor`]). η = 0 is
+/// Eq. 4.10 as printed; above the floor the arithmetic is the printed one to the bit.
+///
 /// Written for speed (this is most of a step's cost): one reciprocal per length instead of a division
 /// per component, and (x₁ − x₄)·e = (x₁ − x₃)·e − |e|², so two dot products serve four.
 #[inline]
-pub fn bending_mode(x: [DVec3; 4]) -> Option<BendingMode> {
+pub fn bending_mode(x: [DVec3; 4], height_floor: f64) -> Option<BendingMode> {
     let [x1, x2, x3, x4] = x;
     let e = x4 - x3;
     let e2 = e.length_squared();
@@ -62,7 +67,16 @@ pub fn bending_mode(x: [DVec3; 4]) -> Option<BendingMode> {
     let (inv_l1, inv_l2) = (1.0 / l1, 1.0 / l2);
     let (n1_hat, n2_hat) = (n1 * inv_l1, n2 * inv_l2);
     // N/|N|².
-    let (w1, w2) = (n1_hat * inv_l1, n2_hat * inv_l2);
+    let (mut w1, mut w2) = (n1_hat * inv_l1, n2_hat * inv_l2);
+    // Each triangle's part of the mode carries the same unit torque about the hinge, so a sliver's is
+    // not bounded alone (that would break angular momentum): the whole mode is scaled instead.
+    let floor = height_floor * e2;
+    let thinnest = l1.min(l2);
+    if thinnest < floor {
+        let s = thinnest / floor;
+        w1 *= s;
+        w2 *= s;
+    }
     let d1 = (x1 - x3).dot(e) * inv_e; // (x₁ − x₃)·e/|e|
     let d2 = (x2 - x3).dot(e) * inv_e;
     let u1 = w1 * e_len;
@@ -86,10 +100,16 @@ pub struct BendingMode {
     pub sin_half: f64,
 }
 
-/// Forces of one element on x₁..x₄ (Eqs. 4.11 and 4.13), N.
+/// Forces of one element on x₁..x₄ (Eqs. 4.11 and 4.13), N; `height_floor` as for [`bending_mode`].
 #[inline]
-pub fn bending_forces(x: [DVec3; 4], v: [DVec3; 4], stiffness: f64, damping: f64) -> [DVec3; 4] {
-    let Some(m) = bending_mode(x) else {
+pub fn bending_forces(
+    x: [DVec3; 4],
+    v: [DVec3; 4],
+    stiffness: f64,
+    damping: f64,
+    height_floor: f64,
+) -> [DVec3; 4] {
+    let Some(m) = bending_mode(x, height_floor) else {
         return [DVec3::ZERO; 4];
     };
     let u = m.u;
@@ -109,11 +129,20 @@ impl BendingElements {
         self.stencils.is_empty()
     }
 
-    /// Adds every element's forces to `f`.
-    pub fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], stiffness: f64, damping: f64) {
+    /// Adds every element's forces to `f` (`height_floor` as for [`bending_mode`]).
+    pub fn add_forces(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        f: &mut [DVec3],
+        stiffness: f64,
+        damping: f64,
+        height_floor: f64,
+    ) {
         for s in &self.stencils {
             let idx = s.map(|i| i as usize);
-            let forces = bending_forces(idx.map(|i| x[i]), idx.map(|i| v[i]), stiffness, damping);
+            let forces =
+                bending_forces(idx.map(|i| x[i]), idx.map(|i| v[i]), stiffness, damping, height_floor);
             for (k, &i) in idx.iter().enumerate() {
                 f[i] += forces[k];
             }
@@ -151,12 +180,12 @@ mod tests {
     #[test]
     fn flat_pair_exerts_no_force() {
         let v = [DVec3::ZERO; 4];
-        let f = bending_forces(pair(0.0), v, 1e-3, 1e-4);
+        let f = bending_forces(pair(0.0), v, 1e-3, 1e-4, 0.0);
         assert!(f.iter().all(|fi| fi.length() < 1e-18), "{f:?}");
         // Also when the flat pair is rotated and moved rigidly.
         let rot = glam::DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
         let moved = pair(0.0).map(|p| rot * p + DVec3::new(3.0, -1.0, 2.0));
-        let f = bending_forces(moved, v, 1e-3, 1e-4);
+        let f = bending_forces(moved, v, 1e-3, 1e-4, 0.0);
         assert!(f.iter().all(|fi| fi.length() < 1e-17), "{f:?}");
     }
 
@@ -166,7 +195,7 @@ mod tests {
             let x = jitter(pair(0.4 * (k as f64 / 10.0 - 2.5)), k);
             let v = jitter([DVec3::ZERO; 4], k + 100).map(|p| p * 10.0);
             for (ke, kd) in [(1e-3, 0.0), (0.0, 1e-4), (1e-3, 1e-4)] {
-                let f = bending_forces(x, v, ke, kd);
+                let f = bending_forces(x, v, ke, kd, 0.0);
                 let sum: DVec3 = f.iter().sum();
                 let torque: DVec3 = x.iter().zip(&f).map(|(p, fi)| p.cross(*fi)).sum();
                 let scale = f.iter().map(|fi| fi.length()).fold(0.0, f64::max).max(1e-30);
@@ -188,7 +217,7 @@ mod tests {
         };
         for k in 0..20 {
             let x = jitter(pair(0.3), k);
-            let u = bending_mode(x).unwrap().u;
+            let u = bending_mode(x, 0.0).unwrap().u;
             for i in 0..4 {
                 for axis in 0..3 {
                     let h = 1e-7;
@@ -206,8 +235,8 @@ mod tests {
     fn bent_element_relaxes_towards_flat_and_damping_dissipates() {
         for lift in [0.5, -0.5, 0.05, -1.5] {
             let x = pair(lift);
-            let f = bending_forces(x, [DVec3::ZERO; 4], 1e-3, 0.0);
-            let angle = |x: [DVec3; 4]| 2.0 * bending_mode(x).unwrap().sin_half.abs().asin();
+            let f = bending_forces(x, [DVec3::ZERO; 4], 1e-3, 0.0, 0.0);
+            let angle = |x: [DVec3; 4]| 2.0 * bending_mode(x, 0.0).unwrap().sin_half.abs().asin();
             let step = 1e-2;
             let moved: Vec<DVec3> = x.iter().zip(&f).map(|(p, fi)| *p + *fi * step).collect();
             let moved = [moved[0], moved[1], moved[2], moved[3]];
@@ -216,19 +245,48 @@ mod tests {
         for k in 0..20 {
             let x = jitter(pair(0.3), k);
             let v = jitter([DVec3::ZERO; 4], k + 7);
-            let f = bending_forces(x, v, 0.0, 1e-4);
+            let f = bending_forces(x, v, 0.0, 1e-4, 0.0);
             let power: f64 = f.iter().zip(&v).map(|(fi, vi)| fi.dot(*vi)).sum();
             assert!(power <= 1e-18, "case {k}: damping power {power} > 0");
         }
     }
 
     #[test]
+    fn the_height_floor_bounds_a_sliver_and_changes_nothing_above_it() {
+        // Every jittered pair has both heights well above 5 % of its hinge: the same bits.
+        for k in 0..20 {
+            let x = jitter(pair(0.3), k);
+            let v = jitter([DVec3::ZERO; 4], k + 7);
+            assert_eq!(bending_forces(x, v, 1e-3, 1e-4, 0.05), bending_forces(x, v, 1e-3, 1e-4, 0.0));
+        }
+        // x₁ brought to within h of the hinge (|e| = 1): as printed, the damping force grows as 1/h²;
+        // with the floor it stops growing below h = η|e|, and momentum is still conserved.
+        let v = [DVec3::Z, DVec3::ZERO, DVec3::ZERO, DVec3::ZERO];
+        let force = |h: f64, eta: f64| {
+            let mut x = pair(0.3);
+            x[0] = DVec3::new(0.3, h, 0.0);
+            bending_forces(x, v, 1e-3, 1e-4, eta)
+        };
+        let printed = force(1e-3, 0.0)[0].length() / force(1e-2, 0.0)[0].length();
+        assert!(printed > 50.0, "as printed, 10× closer gives {printed}× the force");
+        let floored = force(1e-3, 0.05)[0].length() / force(1e-2, 0.05)[0].length();
+        assert!(floored < 1.5, "with the floor, 10× closer gives {floored}× the force");
+        let mut x = pair(0.3);
+        x[0] = DVec3::new(0.3, 1e-3, 0.0);
+        let f = bending_forces(x, jitter([DVec3::ZERO; 4], 3), 1e-3, 1e-4, 0.05);
+        let scale = f.iter().map(|fi| fi.length()).fold(0.0, f64::max);
+        let sum: DVec3 = f.iter().sum();
+        let torque: DVec3 = x.iter().zip(&f).map(|(p, fi)| p.cross(*fi)).sum();
+        assert!(sum.length() < 1e-12 * scale && torque.length() < 1e-12 * scale, "{sum} {torque}");
+    }
+
+    #[test]
     fn degenerate_elements_exert_nothing() {
         let mut x = pair(0.3);
         x[0] = DVec3::new(0.5, 0.0, 0.0); // x₁ on the edge: triangle 1 has no area
-        assert_eq!(bending_forces(x, [DVec3::ONE; 4], 1e-3, 1e-4), [DVec3::ZERO; 4]);
+        assert_eq!(bending_forces(x, [DVec3::ONE; 4], 1e-3, 1e-4, 0.0), [DVec3::ZERO; 4]);
         let mut y = pair(0.3);
         y[3] = y[2];
-        assert_eq!(bending_forces(y, [DVec3::ONE; 4], 1e-3, 1e-4), [DVec3::ZERO; 4]);
+        assert_eq!(bending_forces(y, [DVec3::ONE; 4], 1e-3, 1e-4, 0.0), [DVec3::ZERO; 4]);
     }
 }

@@ -284,6 +284,7 @@ impl OliveiraCloth {
             bending,
             bending_stiffness: material.bending_stiffness,
             bending_damping: material.bending_damping,
+            bending_height_floor: scene.options.bending_height_floor,
             spring_law: scene.options.spring,
             damper_law: scene.options.damper,
             implicit: Default::default(),

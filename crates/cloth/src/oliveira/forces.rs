@@ -29,6 +29,8 @@ pub struct ClothModel {
     pub drag: Vec<f64>,
     pub bending_stiffness: f64,
     pub bending_damping: f64,
+    /// η of [`super::Options::bending_height_floor`].
+    pub bending_height_floor: f64,
     pub spring_law: SpringLaw,
     pub damper_law: DamperLaw,
     /// The spring pattern and (empty) prescribed set the implicit integrators need, built on first use.
@@ -66,7 +68,14 @@ impl ClothModel {
         }
         self.springs.add_forces(x, v, f, self.spring_law, self.damper_law);
         if self.bending_stiffness != 0.0 || self.bending_damping != 0.0 {
-            self.bending.add_forces(x, v, f, self.bending_stiffness, self.bending_damping);
+            self.bending.add_forces(
+                x,
+                v,
+                f,
+                self.bending_stiffness,
+                self.bending_damping,
+                self.bending_height_floor,
+            );
         }
     }
 }

@@ -388,6 +388,12 @@ literal rule), and no simplification patch one longer than L⁰_max; a contour e
 halves keep the short-edge limit. The hole's own border edges are not the mesher's and are not counted (a check \
 that counted them failed on every retry once a short edge sat on the border). A hole whose retries all fail is \
 refused and left as it was (\"patches refused\"); earlier, the first failing patch was kept.\n\
+* **Slivers in bending.** Remeshed cloth makes thin triangles, and springs on edges alone let a triangle pass \
+through flat, where Eq. 4.10's bending mode grows as the inverse of its height and the damping of Eq. 4.13 as the \
+inverse square; the Provot rule sees only springs, so RK4 blew up within a few steps (Test II under the literal \
+rule, at 0.385 s, a triangle at 0.5 % of its rest area). The cloth's `bending_height_floor` (η = 0.05, on by \
+default) scales an element's mode down when a triangle's height is below η·|e|; the uniform meshes never reach it \
+(their rows are the same to the bit), the remeshed runs do.\n\
 * **Idle refinements.** A refinement patch with no more faces than the region it replaces is refused and the \
 region restored (anima's guard, `refuse_idle_refinement`; counted as \"idle refinements refused\"). Near L⁰_min \
 the short-edge rule lets the mesher only regenerate a region at the size it has while the criteria keep \
