@@ -738,7 +738,9 @@ fn drapes_section() -> Result<(), Error> {
 }
 
 /// One generalised-α drape with contact in the solve, set from the environment (`DRAPE` = bunny |
-/// table | sphere, `DT`, `NEWTON`, `RHO`): its error at each snapshot time against both references.
+/// table | sphere, `DT`, `NEWTON`, `RHO`): its error at each snapshot time against both references;
+/// with `POINTS` set, first each material point's distance from the faithful run at the last snapshot
+/// (mm, with the faithful position).
 fn drape_probe_section() -> Result<(), Error> {
     let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
     let slug = std::env::var("DRAPE").unwrap_or_else(|_| "sphere".into());
@@ -762,6 +764,19 @@ fn drape_probe_section() -> Result<(), Error> {
             .collect::<Vec<_>>()
             .join(" ")
     };
+    if std::env::var("POINTS").is_ok() {
+        let (a, b) = (out.snapshots.last().expect("snapshots"), faithful_ref.last().expect("snapshots"));
+        for r in (0..17).step_by(4) {
+            let row: Vec<String> = (0..17)
+                .step_by(4)
+                .map(|c| {
+                    let (p, q) = (a[r * 17 + c], b[r * 17 + c]);
+                    format!("{:5.1} ({:+.2},{:+.2},{:+.2})", p.distance(q) * 1e3, q.x, q.y, q.z)
+                })
+                .collect();
+            println!("{}", row.join("  "));
+        }
+    }
     println!(
         "{} {}: wall {:.3} s, inside {}; RMS (mm) at {:?} s vs thesis [{}], vs converged [{}]",
         d.slug,

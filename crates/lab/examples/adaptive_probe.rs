@@ -1,5 +1,7 @@
 //! Probe of one drape with the thesis's remesher: `TEST` = 1 | 2 | 3, `RULE` = min | literal, `T` = end
-//! time (s), `UNIFORM` set for the static 17 × 17 mesh instead. Prints the state every 10 ms of simulated
+//! time (s), `UNIFORM` set for the static 17 × 17 mesh instead, `IMPLICIT` for backward Euler at 1/4000 s
+//! (contact from the end-of-step velocity), `COARSEN=0` to turn `coarsen_simplification` off,
+//! `REBUILDS` to print every rebuild. Prints the state every 10 ms of simulated
 //! time (the smallest world area of a triangle over its rest area first), a rebuild that leaves a
 //! triangle under 5 % of its rest area, the fastest particle's springs and bending elements whenever a
 //! particle passes 20 m/s, and the remesher's counts.
@@ -21,11 +23,23 @@ fn main() -> anyhow::Result<()> {
     if let (false, StepRule::Provot { startup_dt_s, .. }) = (uniform, loaded.scene.time_step) {
         loaded.scene.time_step = StepRule::Provot { beta: 0.001, startup_dt_s };
     }
+    if std::env::var("IMPLICIT").is_ok() {
+        loaded.scene.integrator = anima_ode::Integrator::ImplicitEuler;
+        loaded.scene.time_step = StepRule::Fixed { dt_s: 1.0 / 4000.0 };
+        loaded.scene.options.contact_velocity = anima_cloth::oliveira::ContactVelocity::EndOfStep;
+    }
     let cloth = loaded.build()?;
     let short_edge = if literal { ShortEdgeRule::LiteralSquare } else { ShortEdgeRule::MinLength };
     let method = Remesher::Oliveira { test: n as u8, short_edge, interval_s: 1e-3 }
         .method()
         .map_err(anyhow::Error::msg)?;
+    let method = match method {
+        anima_cloth::oliveira::AdaptiveMethod::Oliveira(mut p) => {
+            p.coarsen_simplification = std::env::var("COARSEN").map_or(true, |s| s != "0");
+            anima_cloth::oliveira::AdaptiveMethod::Oliveira(p)
+        }
+        other => other,
+    };
     let method = if uniform { anima_cloth::oliveira::AdaptiveMethod::Static } else { method };
     let mut c = AdaptiveCloth::new(cloth, loaded.scene.gravity_m_s2, method);
     let mut next = 0.0;
@@ -42,6 +56,17 @@ fn main() -> anyhow::Result<()> {
         if c.stats().rebuilds != rebuilds {
             rebuilds = c.stats().rebuilds;
             let (f, q) = worst(cl);
+            if std::env::var("REBUILDS").is_ok() {
+                let st = c.stats();
+                println!(
+                    "  rebuild t {:.4}: refinements {} simplifications {} next dt {:.2e} min edge {:.4}",
+                    cl.time(),
+                    st.refinements,
+                    st.simplifications,
+                    cl.next_dt(),
+                    anima_cloth::oliveira::adaptive::min_rest_edge(cl.mesh())
+                );
+            }
             if q < 0.05 {
                 println!(
                     "  rebuild at t {:.5}: worst area ratio {q:.3e} face {f} {:?}",
@@ -75,7 +100,7 @@ fn main() -> anyhow::Result<()> {
             }
         }
     }
-    println!("{:?}", c.stats());
+    println!("steps {} {:?}", c.cloth().steps(), c.stats());
     Ok(())
 }
 
@@ -93,7 +118,11 @@ fn dump(cl: &anima_cloth::oliveira::OliveiraCloth) {
     for (e, &[a, b]) in s.ends.iter().enumerate() {
         if a as usize == i || b as usize == i {
             let len = x[a as usize].distance(x[b as usize]);
-            println!("  spring {a}-{b} L0 {:.4} len {:.4} k {:.1}", s.rest_length[e], len, s.stiffness[e]);
+            let other = if a as usize == i { b } else { a } as usize;
+            println!(
+                "  spring {a}-{b} L0 {:.4} len {:.4} k {:.1} (at {:.3}, other end at {:.3})",
+                s.rest_length[e], len, s.stiffness[e], x[i], x[other]
+            );
         }
     }
     for st in &cl.bending().stencils {

@@ -126,6 +126,9 @@ pub struct RemeshStats {
     /// counted in `failures`). Attempts are `simplifications + simplifications_refused +
     /// simplifications_failed`.
     pub simplifications_failed: u64,
+    /// Oliveira: of `simplifications`, those made by removing one vertex of the region after the hole
+    /// mesher's patch was refused or failed (`OliveiraRemeshing::coarsen_simplification`).
+    pub vertex_removals: u64,
     /// Oliveira: simplification components not attempted because none of their vertices may be
     /// removed, so that no patch could have fewer faces (see [`AdaptiveMesh::removable_vertices`]).
     pub simplifications_skipped: u64,
@@ -521,7 +524,10 @@ fn oliveira_pass(
         } else {
             RegionRemeshing {
                 density: d0 * p.density_simplify,
-                retry: RetryRule::bounded_simplification(Some(p.short_edge_limit()), Some(p.max_rest_length)),
+                retry: RetryRule {
+                    max_triangles: p.coarsen_simplification.then(|| faces.len().saturating_sub(1)),
+                    ..RetryRule::bounded_simplification(Some(p.short_edge_limit()), Some(p.max_rest_length))
+                },
                 contour: ContourRule::MergeStraight { max_length: p.max_rest_length },
                 improvement_rounds: p.improvement_rounds,
             }
@@ -565,16 +571,27 @@ fn oliveira_pass(
             if refining {
                 stats.refinements_refused += 1;
                 idle.push(faces.clone());
-            } else {
-                stats.simplifications_refused += 1;
             }
         }
-        if !refining && (refused || result.is_err()) && p.delay_refused_simplification {
+        // The hole mesher made no fewer faces within the rules: one vertex of the region goes instead,
+        // its star filled without a new point (`coarsen_simplification`).
+        let removed = !refining
+            && (refused || result.is_err())
+            && p.coarsen_simplification
+            && remove_one_vertex(mesh, faces, p.max_rest_length, p.short_edge_limit());
+        if !refining && refused && !removed {
+            stats.simplifications_refused += 1;
+        }
+        if !refining && (refused || result.is_err()) && !removed && p.delay_refused_simplification {
             for k in face_edge_keys(mesh, faces) {
                 refined_at.insert(k, t);
             }
         }
         match result {
+            _ if removed => {
+                stats.simplifications += 1;
+                stats.vertex_removals += 1;
+            }
             _ if refused => {}
             Ok(_) if refining => {
                 stats.refinements += 1;
@@ -603,6 +620,30 @@ fn oliveira_pass(
         failed.clear();
     }
     rebuilt
+}
+
+/// Removes the first vertex of region `faces` (in slot order) whose star can be filled without it within
+/// `[min_length, max_span]` ([`AdaptiveMesh::remove_vertex`]) and without lowering the explicit step
+/// rule's bound: no new edge shorter than the mesh's shortest (k^e = E·A⁰/L⁰, so k_max stays) and no
+/// neighbour's share of area below the smallest vertex's (m_min stays). Whether one went.
+fn remove_one_vertex(mesh: &mut AdaptiveMesh, faces: &[u32], max_span: f64, min_length: f64) -> bool {
+    let shortest = mesh
+        .edges()
+        .iter()
+        .map(|&(_, a, b)| mesh.rest()[a as usize].distance(mesh.rest()[b as usize]))
+        .fold(f64::INFINITY, f64::min);
+    let least_area = (0..mesh.n_vertex_slots() as u32)
+        .filter(|&v| mesh.is_vertex_alive(v))
+        .map(|v| mesh.vertex_rest_area(v))
+        .fold(f64::INFINITY, f64::min);
+    let min_length = min_length.max(shortest);
+    let contour = ContourRule::MergeStraight { max_length: max_span };
+    let inside: Vec<u32> = mesh
+        .removable_vertices(faces, contour, max_span)
+        .into_iter()
+        .filter(|&v| mesh.vertex_faces(v).iter().all(|f| faces.contains(f)))
+        .collect();
+    inside.into_iter().any(|v| mesh.remove_vertex(v, max_span, min_length, least_area).is_some())
 }
 
 /// One pass of the 1-to-4 baseline.

@@ -569,24 +569,48 @@ pub struct RetryRule {
     /// At most this many generations (50 (spec reconstruction)); a hole with no acceptable patch after
     /// them is refused.
     pub max_tries: usize,
+    /// A patch with more triangles than this is redone with d ÷= `factor` (a simplification that must
+    /// have fewer faces than the region it replaces; checked after the edge lengths).
+    pub max_triangles: Option<usize>,
 }
 
 impl RetryRule {
     /// The thesis's refinement loop with the given short-edge limit.
     pub const fn refinement(short_edge: Option<f64>) -> Self {
-        Self { require_interior_vertex: true, short_edge, long_edge: None, factor: 1.01, max_tries: 50 }
+        Self {
+            require_interior_vertex: true,
+            short_edge,
+            long_edge: None,
+            factor: 1.01,
+            max_tries: 50,
+            max_triangles: None,
+        }
     }
 
     /// Simplification as the thesis runs it: one generation, no checks.
     pub const fn simplification() -> Self {
-        Self { require_interior_vertex: false, short_edge: None, long_edge: None, factor: 1.01, max_tries: 1 }
+        Self {
+            require_interior_vertex: false,
+            short_edge: None,
+            long_edge: None,
+            factor: 1.01,
+            max_tries: 1,
+            max_triangles: None,
+        }
     }
 
     /// Simplification whose generated edges stay within [`short_edge`, `long_edge`]: the density is
     /// raised (an edge too long) or lowered (one too short) by 5 % for up to 50 generations (a
     /// simplification density can be several times too coarse for `long_edge`: 1.05⁵⁰ ≈ 11).
     pub const fn bounded_simplification(short_edge: Option<f64>, long_edge: Option<f64>) -> Self {
-        Self { require_interior_vertex: false, short_edge, long_edge, factor: 1.05, max_tries: 50 }
+        Self {
+            require_interior_vertex: false,
+            short_edge,
+            long_edge,
+            factor: 1.05,
+            max_tries: 50,
+            max_triangles: None,
+        }
     }
 
     /// Whether `m` may be accepted, and if not which way the density should go.
@@ -599,6 +623,8 @@ impl RetryRule {
             Verdict::Coarser
         } else if self.long_edge.is_some_and(|l| longest > l) {
             Verdict::Denser
+        } else if self.max_triangles.is_some_and(|n| m.triangles.len() > n) {
+            Verdict::Coarser
         } else {
             Verdict::Accept
         }
@@ -851,6 +877,23 @@ mod tests {
         assert_eq!(s.tries, 1);
         let e = ear_clip(&square(3, 1.0)).unwrap();
         assert_eq!(e.len(), 10);
+    }
+
+    #[test]
+    fn a_triangle_cap_makes_the_loop_coarser() {
+        // A square of 12 border points filled densely has interior points; capped below that count,
+        // the loop lowers d until a patch with at most the cap comes out, and never returns one over.
+        let loops = vec![square(3, 1.0)];
+        let dense = mesh_hole_with_retries(&loops, 2.0, &RetryRule::simplification(), 3).unwrap();
+        assert!(dense.mesh.n_interior() > 0, "{dense:?}");
+        let cap = dense.mesh.triangles.len() - 1;
+        let rule = RetryRule { max_triangles: Some(cap), ..RetryRule::bounded_simplification(None, None) };
+        let r = mesh_hole_with_retries(&loops, 2.0, &rule, 3).unwrap();
+        check(&loops, &r.mesh, "capped");
+        assert!(r.mesh.triangles.len() <= cap && r.density < 2.0, "{} > {cap}", r.mesh.triangles.len());
+        // A cap under the border's own b − 2 triangles cannot be met.
+        let none = RetryRule { max_triangles: Some(9), ..RetryRule::bounded_simplification(None, None) };
+        assert_eq!(mesh_hole_with_retries(&loops, 2.0, &none, 3), Err(LocalMeshError::Refused(50)));
     }
 
     #[test]

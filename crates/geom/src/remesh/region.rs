@@ -172,6 +172,68 @@ impl AdaptiveMesh {
         out
     }
 
+    /// Removes interior vertex `v` and fills its star with the triangulation of its neighbours whose
+    /// longest edge is smallest, when that edge is at most `max_span`, every new edge at least
+    /// `min_length` and every neighbour left with at least `min_vertex_area` (a third of the rest area
+    /// of its faces, what a lumped mass follows): two faces fewer, no point moved or added. Returns the
+    /// new faces, or `None` (the mesh unchanged) when `v` is locked, on the contour, or has no such
+    /// triangulation.
+    pub fn remove_vertex(
+        &mut self,
+        v: u32,
+        max_span: f64,
+        min_length: f64,
+        min_vertex_area: f64,
+    ) -> Option<Vec<u32>> {
+        if !self.is_vertex_alive(v) || self.locked[v as usize] || self.is_boundary_vertex(v) {
+            return None;
+        }
+        let ring = self.star_ring(v);
+        let star = self.vertex_faces(v);
+        if ring.len() != star.len() {
+            return None;
+        }
+        let points: Vec<DVec2> = ring.iter().map(|&w| self.rest[w as usize]).collect();
+        let (longest, triangles) = minimax_triangles(&points)?;
+        let n = ring.len();
+        let shortest_new = triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .filter(|&(a, b)| (a + 1) % n != b && (b + 1) % n != a)
+            .map(|(a, b)| points[a].distance(points[b]))
+            .fold(f64::INFINITY, f64::min);
+        if longest > max_span || shortest_new < min_length {
+            return None;
+        }
+        let star_area = |k: usize| -> f64 {
+            star.iter()
+                .filter(|&&f| self.face_slots()[f as usize].contains(&ring[k]))
+                .map(|&f| self.rest_area(f))
+                .sum()
+        };
+        let new_area = |k: usize| -> f64 {
+            triangles
+                .iter()
+                .filter(|t| t.contains(&k))
+                .map(|t| 0.5 * super::mesh::cross2(points[t[0]], points[t[1]], points[t[2]]))
+                .sum()
+        };
+        if (0..n)
+            .any(|k| self.vertex_rest_area(ring[k]) + (new_area(k) - star_area(k)) / 3.0 < min_vertex_area)
+        {
+            return None;
+        }
+        let tris: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|k| ring[k])).collect();
+        let first = self.log().added_faces.len();
+        self.replace_patch(&star, &[], &tris).ok()?;
+        Some(self.log().added_faces[first..].to_vec())
+    }
+
+    /// A third of the rest area of `v`'s faces: the share of the cloth's area a lumped mass follows.
+    pub fn vertex_rest_area(&self, v: u32) -> f64 {
+        self.vertex_faces(v).iter().map(|&f| self.rest_area(f)).sum::<f64>() / 3.0
+    }
+
     /// The neighbours of interior vertex `v` in counter-clockwise order (the border of its star).
     fn star_ring(&self, v: u32) -> Vec<u32> {
         let faces = self.vertex_faces(v);
@@ -267,9 +329,15 @@ fn contains(p: &[DVec2], q: DVec2) -> bool {
 /// `p` that add no point (its sides included); ∞ when it has none (fewer than three points, or no
 /// proper triangulation). Dynamic programming over sub-chains, O(n³): used on vertex stars, n ≈ 6.
 fn minimax_triangulation(p: &[DVec2]) -> f64 {
+    minimax_triangles(p).map_or(f64::INFINITY, |(longest, _)| longest)
+}
+
+/// [`minimax_triangulation`]'s triangulation: its longest edge and its triangles (indices into `p`,
+/// counter-clockwise); `None` when there is none.
+fn minimax_triangles(p: &[DVec2]) -> Option<(f64, Vec<[usize; 3]>)> {
     let n = p.len();
     if n < 3 {
-        return f64::INFINITY;
+        return None;
     }
     let crosses = |a: usize, b: usize| {
         (0..n).any(|i| {
@@ -282,6 +350,7 @@ fn minimax_triangulation(p: &[DVec2]) -> f64 {
         (b == (a + 1) % n || a == (b + 1) % n) || (!crosses(a, b) && contains(p, 0.5 * (p[a] + p[b])))
     };
     let mut best = vec![vec![f64::INFINITY; n]; n];
+    let mut split = vec![vec![usize::MAX; n]; n];
     for i in 0..n - 1 {
         best[i][i + 1] = 0.0;
     }
@@ -294,12 +363,30 @@ fn minimax_triangulation(p: &[DVec2]) -> f64 {
             for k in i + 1..j {
                 if super::mesh::is_proper(p[i], p[k], p[j]) {
                     let worst = best[i][k].max(best[k][j]).max(p[i].distance(p[k])).max(p[k].distance(p[j]));
-                    best[i][j] = best[i][j].min(worst);
+                    if worst < best[i][j] {
+                        best[i][j] = worst;
+                        split[i][j] = k;
+                    }
                 }
             }
         }
     }
-    best[0][n - 1].max(p[0].distance(p[n - 1]))
+    let longest = best[0][n - 1].max(p[0].distance(p[n - 1]));
+    if !longest.is_finite() {
+        return None;
+    }
+    let mut triangles = Vec::with_capacity(n - 2);
+    let mut todo = vec![(0, n - 1)];
+    while let Some((i, j)) = todo.pop() {
+        if j <= i + 1 {
+            continue;
+        }
+        let k = split[i][j];
+        triangles.push([i, k, j]);
+        todo.push((i, k));
+        todo.push((k, j));
+    }
+    Some((longest, triangles))
 }
 
 #[cfg(test)]
@@ -361,6 +448,41 @@ mod tests {
         m.set_locked(4, true);
         m.set_locked(7, true);
         assert_eq!(m.removable_vertices(&all, merge, span), vec![1, 3, 5]);
+    }
+
+    #[test]
+    fn removing_a_vertex_fills_its_star_within_the_bounds() {
+        // The 3 × 3 grid's centre: its hexagon star closes at best with 1 m edges (see above), with
+        // diagonals of 1 m and √0.5 m.
+        let mut m = grid(3, 1.0, DiagonalPattern::Uniform);
+        let (faces, area) = (m.n_faces(), m.total_rest_area());
+        assert_eq!(m.remove_vertex(4, 0.99, 0.0, 0.0), None, "span too short");
+        assert_eq!(m.remove_vertex(4, 1.0, 1.01, 0.0), None, "a new edge under the short-edge limit");
+        assert_eq!(m.remove_vertex(1, 2.0, 0.0, 0.0), None, "a contour vertex stays");
+        assert_eq!(m.n_faces(), faces, "refusals leave the mesh as it was");
+        // The neighbours' areas after the removal: they still share the whole area, and a floor above
+        // the smallest of them refuses.
+        let mut probe = m.clone();
+        probe.remove_vertex(4, 1.0, 0.7, 0.0).expect("within the bounds");
+        let shares: Vec<f64> = (0..9).filter(|&v| v != 4).map(|v| probe.vertex_rest_area(v)).collect();
+        assert!((shares.iter().sum::<f64>() - area).abs() < 1e-12);
+        let least = shares.iter().copied().fold(f64::INFINITY, f64::min);
+        assert_eq!(m.remove_vertex(4, 1.0, 0.7, 1.01 * least), None, "a neighbour's share too small");
+        let new = m.remove_vertex(4, 1.0, 0.7, 0.99 * least).expect("within the bounds");
+        assert_eq!(new.len(), 4);
+        assert_eq!(m.n_faces(), faces - 2);
+        assert!(!m.is_vertex_alive(4));
+        assert!((m.total_rest_area() - area).abs() < 1e-12);
+        for &f in &new {
+            let t = m.face_slots()[f as usize];
+            for k in 0..3 {
+                let l = m.rest()[t[k] as usize].distance(m.rest()[t[(k + 1) % 3] as usize]);
+                assert!(l <= 1.0 + 1e-12, "edge {l}");
+            }
+        }
+        let mut locked = grid(3, 1.0, DiagonalPattern::Uniform);
+        locked.set_locked(4, true);
+        assert_eq!(locked.remove_vertex(4, 2.0, 0.0, 0.0), None, "a locked vertex stays");
     }
 
     #[test]

@@ -81,6 +81,15 @@ pub struct OliveiraRemeshing {
     /// selected again (anima's; on). Off, a region that cannot coarsen is regenerated and refused at
     /// every pass, as before.
     pub delay_refused_simplification: bool,
+    /// A simplification patch with no fewer faces than its region is regenerated coarser (the density
+    /// lowered 5 % a generation, within the edge-length rules and the retry cap), and when no
+    /// generation both has fewer faces and keeps the rules, one vertex of the region is removed and
+    /// its star filled without a new point ([`anima_geom::remesh::AdaptiveMesh::remove_vertex`],
+    /// within [L⁰_min-rule, L⁰_max]), instead of the guard refusing the attempt (anima's; on). The
+    /// thesis meshes a simplified hole once at the border's density; where the border is fine that
+    /// density puts back as many interior points as were there (the front places them in steps, so a
+    /// density between two counts often gives an edge over L⁰_max), and the guard undid the attempt.
+    pub coarsen_simplification: bool,
     /// A refinement patch with no more faces than the region it replaces is refused and the region
     /// restored (anima's; on). Near L⁰_min the mesher, held back by the short-edge rule, can only
     /// regenerate a region at the size it has, while the criteria keep selecting it: every pass then
@@ -116,6 +125,7 @@ impl OliveiraRemeshing {
             improvement_rounds: 3,
             simplify: true,
             delay_refused_simplification: true,
+            coarsen_simplification: true,
             refuse_idle_refinement: true,
             interval_s: 0.0,
             repel_unrefinable_edges: true,
