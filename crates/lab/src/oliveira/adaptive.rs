@@ -436,16 +436,7 @@ fn report(repo: &Repo, test: &Test, runs: &[Run], implicit: &[Run]) -> Result<St
     for r in runs {
         let last = r.samples.last().expect("samples");
         let err = reference.map_or(f64::NAN, |f| rms(&r.points, &f.points));
-        let wall = match (r.stopped_at, &r.failure) {
-            (Some(_), Some(why)) => format!("{:.2}, **failed**: {why}", r.wall_s),
-            (Some(t), None) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
-            _ => format!("{:.2}", r.wall_s),
-        };
-        let err = match r.stopped_at {
-            Some(_) if r.points.is_empty() => "—".to_string(),
-            Some(_) => format!("{err:.4} (to the stop)"),
-            None => format!("{err:.4}"),
-        };
+        let (wall, err) = (wall_cell(r), error_cell(r, err));
         writeln!(
             s,
             "| **anima**, {} | {} | {} | {:.3e} | {} / {} / {} | {:.4} | {:.3e} | {} |",
@@ -778,6 +769,24 @@ The thesis's claims about this test (spec §7.6), checked on our runs:
     Ok(s)
 }
 
+/// A run's wall-time cell, s: marked failed (with why) or stopped (with when) when it did not finish.
+fn wall_cell(r: &Run) -> String {
+    match (r.stopped_at, &r.failure) {
+        (Some(_), Some(why)) => format!("{:.2}, **failed**: {why}", r.wall_s),
+        (Some(t), None) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
+        _ => format!("{:.2}", r.wall_s),
+    }
+}
+
+/// A run's error cell, m: over the snapshots it reached when it did not finish.
+fn error_cell(r: &Run, err: f64) -> String {
+    match r.stopped_at {
+        Some(_) if r.points.is_empty() => "—".to_string(),
+        Some(_) => format!("{err:.4} (to the stop)"),
+        None => format!("{err:.4}"),
+    }
+}
+
 /// The backward-Euler table and its work–precision verdict. The reference is the RK4 17 × 17 run of the
 /// first table, as there.
 fn implicit_report(rk4: &[Run], runs: &[Run]) -> Result<String> {
@@ -800,16 +809,7 @@ fn implicit_report(rk4: &[Run], runs: &[Run]) -> Result<String> {
     for r in runs {
         let last = r.samples.last().expect("samples");
         // A run that failed or was stopped is shown as such and left out of the verdict.
-        let wall = match (r.stopped_at, &r.failure) {
-            (Some(_), Some(why)) => format!("{:.2}, **failed**: {why}", r.wall_s),
-            (Some(t), None) => format!("{:.2}, stopped at t = {t:.3} s", r.wall_s),
-            _ => format!("{:.2}", r.wall_s),
-        };
-        let error = match r.stopped_at {
-            Some(_) if r.points.is_empty() => "—".to_string(),
-            Some(_) => format!("{:.4} (to the stop)", err(r)),
-            None => format!("{:.4}", err(r)),
-        };
+        let (wall, error) = (wall_cell(r), error_cell(r, err(r)));
         writeln!(
             s,
             "| {} | {wall} | {} | {:.3e} | {} / {} / {} | {:.4} | {error} | {} |",
