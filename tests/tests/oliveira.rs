@@ -262,6 +262,16 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
     let e = load_oliveira(&p).unwrap_err().to_string();
     assert!(e.contains("misspelt.ron:") && e.contains("`restitution`") && e.contains("restitutoin"), "{e}");
 
+    // An option out of range: file, line and the field.
+    let sphere = std::fs::read_to_string(assets().join("test-3-sphere-5x5.ron")).unwrap();
+    let bad =
+        sphere.replace("restitution: 0.5,", "restitution: 0.5,\n    options: (bending_height_floor: -1.0),");
+    let e = load_oliveira(&write("floor.ron", &bad)).unwrap_err().to_string();
+    assert!(
+        e.contains("floor.ron: line 36, column 15") && e.contains("bending_height_floor") && e.contains("-1"),
+        "{e}"
+    );
+
     // Broken syntax.
     let p = write("syntax.ron", &good.replace("size_m: 1.0,", "size_m: 1.0.0,"));
     let e = load_oliveira(&p).unwrap_err();
@@ -298,6 +308,9 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
     s.material.young_modulus_pa = f64::NAN;
     assert!(OliveiraCloth::new(&s, vec![]).unwrap_err().to_string().contains("young_modulus_pa"));
     s.material = Material::table_5_5();
+    s.options.bending_height_floor = f64::NAN;
+    assert!(OliveiraCloth::new(&s, vec![]).unwrap_err().to_string().contains("bending_height_floor"));
+    s.options.bending_height_floor = Options::BENDING_HEIGHT_FLOOR;
     s.cloth.height = Height::At { z_m: 0.25 };
     assert!(matches!(OliveiraCloth::new(&s, vec![]), Err(BuildError::StartsInside { .. })));
     // The scene names one mesh; none given.

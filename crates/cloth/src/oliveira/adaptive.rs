@@ -637,12 +637,8 @@ fn remove_one_vertex(mesh: &mut AdaptiveMesh, faces: &[u32], max_span: f64, min_
         .map(|v| mesh.vertex_rest_area(v))
         .fold(f64::INFINITY, f64::min);
     let min_length = min_length.max(shortest);
-    let contour = ContourRule::MergeStraight { max_length: max_span };
-    let inside: Vec<u32> = mesh
-        .removable_vertices(faces, contour, max_span)
-        .into_iter()
-        .filter(|&v| mesh.vertex_faces(v).iter().all(|f| faces.contains(f)))
-        .collect();
+    // `Keep`: only the region's own interior vertices, not the contour vertices a merge would drop.
+    let inside = mesh.removable_vertices(faces, ContourRule::Keep, max_span);
     inside.into_iter().any(|v| mesh.remove_vertex(v, max_span, min_length, least_area).is_some())
 }
 

@@ -194,6 +194,10 @@ impl OliveiraCloth {
         if !(0.0..=1.0).contains(&scene.restitution) {
             return Err(field("restitution", format!("must lie in [0, 1], got {}", scene.restitution)));
         }
+        let eta = scene.options.bending_height_floor;
+        if !(0.0..=1.0).contains(&eta) {
+            return Err(field("options.bending_height_floor", format!("must lie in [0, 1], got {eta}")));
+        }
         if let Some(name) = scene.material.invalid_field() {
             return Err(field("material", format!("field `{name}` is out of range")));
         }

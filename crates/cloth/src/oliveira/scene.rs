@@ -227,7 +227,7 @@ pub struct Options {
     /// rule gives (the rule sees springs only): the thesis's remesher under the literal short-edge rule
     /// diverged so on Test II. With η > 0 the mode of an element with a triangle whose height is below
     /// η·|e| is scaled down by that height over η·|e| ([`super::bending::bending_mode`]), which bounds it
-    /// and keeps momentum; 0 gives Eqs. 4.10–4.13 as printed. The default, 0.05,
+    /// and keeps momentum; 0 gives Eqs. 4.10–4.13 as printed (η lies in [0, 1]). The default, 0.05,
     /// is never reached on the thesis's uniform drapes (their triangles keep at least 70 % of their rest
     /// area), which are the same to the bit with it. Not written when it is the default.
     #[serde(skip_serializing_if = "Options::is_default_bending_height_floor")]
