@@ -272,6 +272,18 @@ fn malformed_scenes_and_bad_meshes_give_errors_not_panics() {
         "{e}"
     );
 
+    // A membrane material out of range (ν ≥ 0.5): file, line and the field, and why.
+    let bad = sphere.replace(
+        "restitution: 0.5,",
+        "restitution: 0.5,\n    options: (membrane: Some((young_thickness_n_m: 1000.0, poisson: 0.7, \
+         bending_n_m: 0.001, damping_s: 0.001))),",
+    );
+    let e = load_oliveira(&write("membrane.ron", &bad)).unwrap_err().to_string();
+    assert!(
+        e.contains("membrane.ron: line 36, column 15") && e.contains("membrane") && e.contains("Poisson"),
+        "{e}"
+    );
+
     // Broken syntax.
     let p = write("syntax.ron", &good.replace("size_m: 1.0,", "size_m: 1.0.0,"));
     let e = load_oliveira(&p).unwrap_err();

@@ -316,7 +316,13 @@ impl Membrane {
 
     /// Adds the elastic and damping forces at (x, v) to `f`; with `jac`, also their Jacobians (K to
     /// `k_*`, D = c_d K to `d_*`).
-    fn add_forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], mut jac: Option<&mut Jacobians<DVec3>>) {
+    pub(crate) fn add_forces(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        f: &mut [DVec3],
+        mut jac: Option<&mut Jacobians<DVec3>>,
+    ) {
         let (mu, lambda) = self.material.lame();
         let cd = self.material.damping;
         // The element's stiffness blocks are needed for its damping force and for the Jacobians only.

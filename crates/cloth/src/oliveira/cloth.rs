@@ -16,6 +16,7 @@ use super::material::Material;
 use super::scene::{Centre, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
 use super::springs::Springs;
 use crate::contact_mode::ContactMode;
+use crate::membrane::{Membrane, MembraneError, MembraneMaterial};
 use crate::self_collision::{SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats};
 
 /// Why a scene could not be built.
@@ -100,6 +101,18 @@ fn self_collision_for(options: &Options, mesh: &MaterialMesh) -> Option<SelfColl
         let shortest = mesh.edge_rest_lengths().into_iter().fold(f64::INFINITY, f64::min);
         SelfCollision::for_spacing(shortest)
     })
+}
+
+/// The continuum model of [`Options::membrane`] on `mesh`'s rest shape (flat, z = 0), with the cloth's
+/// surface density; gravity and drag stay with the cloth.
+fn membrane_on(
+    mesh: &MaterialMesh,
+    m: MembraneMaterial,
+    material: &Material,
+) -> Result<Membrane, MembraneError> {
+    let rest: Vec<DVec3> = mesh.rest().iter().map(|p| p.extend(0.0)).collect();
+    let density = material.density_kg_m3 * material.thickness_m;
+    Membrane::new(&rest, mesh.triangles(), m, density, vec![false; rest.len()], DVec3::ZERO)
 }
 
 fn field(field: &'static str, message: impl Into<String>) -> BuildError {
@@ -291,6 +304,13 @@ impl OliveiraCloth {
             bending_height_floor: scene.options.bending_height_floor,
             spring_law: scene.options.spring,
             damper_law: scene.options.damper,
+            membrane: match scene.options.membrane {
+                Some(m) => Some(
+                    membrane_on(&mesh, m, &material)
+                        .map_err(|e| field("options.membrane", format!("is not usable: {e}")))?,
+                ),
+                None => None,
+            },
             implicit: Default::default(),
         };
         let n_vertices = x.len();
@@ -642,6 +662,12 @@ impl OliveiraCloth {
         m.bending = BendingElements {
             stencils: mesh.topology().interior_stencils().iter().map(|s| s.vertices).collect(),
         };
+        if let Some(membrane) = self.options.membrane {
+            // The material was accepted when the cloth was built, and a remeshed mesh's rest triangles
+            // have positive area (the drivers check it after every remesh).
+            m.membrane =
+                Some(membrane_on(&mesh, membrane, &material).expect("a remeshed mesh takes the membrane"));
+        }
         m.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
         m.weight = mass.iter().map(|&m| gravity * m).collect();
         m.drag = areas.iter().map(|&a| material.particle_drag(a)).collect();

@@ -15,6 +15,7 @@ use glam::DMat3;
 use super::bending::BendingElements;
 use super::scene::{DamperLaw, SpringLaw};
 use super::springs::Springs;
+use crate::membrane::Membrane;
 
 /// Everything the acceleration depends on, as flat arrays over particles, springs and elements.
 #[derive(Debug, Clone)]
@@ -33,6 +34,9 @@ pub struct ClothModel {
     pub bending_height_floor: f64,
     pub spring_law: SpringLaw,
     pub damper_law: DamperLaw,
+    /// The continuum model of [`super::Options::membrane`]: when present its elastic, bending and damping
+    /// forces replace the springs' and the bending elements'.
+    pub membrane: Option<Membrane>,
     /// The spring pattern and (empty) prescribed set the implicit integrators need, built on first use.
     pub(crate) implicit: ImplicitParts,
 }
@@ -53,18 +57,33 @@ impl ClothModel {
 
     fn ensure_implicit(&mut self) {
         let parts = &mut self.implicit;
-        if parts.pattern.len() != self.springs.len() || parts.prescribed.len() != self.mass.len() {
-            parts.pattern = self.springs.ends.iter().map(|&[i, j]| (i.min(j), i.max(j))).collect();
-            parts.prescribed = vec![false; self.mass.len()];
+        let n_pairs = self.membrane.as_ref().map_or(self.springs.len(), |m| Linearized::pattern(m).len());
+        if parts.pattern.len() == n_pairs && parts.prescribed.len() == self.mass.len() {
+            return;
         }
+        parts.pattern = match &self.membrane {
+            Some(m) => Linearized::pattern(m).to_vec(),
+            None => self.springs.ends.iter().map(|&[i, j]| (i.min(j), i.max(j))).collect(),
+        };
+        parts.prescribed = vec![false; self.mass.len()];
     }
 }
 
 impl ClothModel {
-    /// The total force on every particle, N: f_i = m_i g − C_i v_i + springs + bending (Eq. 4.7).
-    pub fn forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+    /// f_i = m_i g − C_i v_i: the forces every model shares.
+    fn weight_and_drag(&self, v: &[DVec3], f: &mut [DVec3]) {
         for ((fi, (w, c)), vi) in f.iter_mut().zip(self.weight.iter().zip(&self.drag)).zip(v) {
             *fi = *w - *vi * *c;
+        }
+    }
+
+    /// The total force on every particle, N: f_i = m_i g − C_i v_i + springs + bending (Eq. 4.7), or
+    /// the membrane's forces in place of the springs and bending.
+    pub fn forces(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+        self.weight_and_drag(v, f);
+        if let Some(m) = &self.membrane {
+            m.add_forces(x, v, f, None);
+            return;
         }
         self.springs.add_forces(x, v, f, self.spring_law, self.damper_law);
         if self.bending_stiffness != 0.0 || self.bending_damping != 0.0 {
@@ -125,10 +144,15 @@ impl Linearized<DVec3> for ClothModel {
         f: &mut [DVec3],
         jac: &mut Jacobians<DVec3>,
     ) {
-        self.forces(x, v, f);
         for (d, &c) in jac.d_diag.iter_mut().zip(&self.drag) {
             *d -= DMat3::from_diagonal(DVec3::splat(c));
         }
+        if let Some(m) = &self.membrane {
+            self.weight_and_drag(v, f);
+            m.add_forces(x, v, f, Some(jac));
+            return;
+        }
+        self.forces(x, v, f);
         let s = &self.springs;
         for (e, &[i, j]) in s.ends.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);

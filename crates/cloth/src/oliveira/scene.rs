@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::material::Material;
 use crate::contact_mode::ContactMode;
+use crate::membrane::MembraneMaterial;
 use crate::self_collision::SelfCollisionMode;
 
 /// Gravity in every Oliveira test: (0, 0, −9.81) m/s², z up (Tables 5.1, 5.3, 5.5).
@@ -232,6 +233,15 @@ pub struct Options {
     /// area), which are the same to the bit with it. Not written when it is the default.
     #[serde(skip_serializing_if = "Options::is_default_bending_height_floor")]
     pub bending_height_floor: f64,
+    /// The cloth's forces from a continuum model instead of the thesis's springs and bending elements
+    /// (anima's addition, for measuring adaptivity: a spring network's response depends on its mesh, so
+    /// its refinements do not converge): co-rotational constant-strain triangles and quadratic bending
+    /// hinges of [`crate::membrane`] with this material, on the cloth's rest mesh and rebuilt at every
+    /// remesh. Masses, gravity, air drag and contact stay the thesis's; the springs are still built, for
+    /// the remeshing criteria and the step rule's k^e_max (Eq. 4.6), but exert no force. `None` (the
+    /// default) is the thesis's model. Not written when it is the default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub membrane: Option<MembraneMaterial>,
 }
 
 impl Options {
@@ -249,6 +259,7 @@ impl Options {
             contact: ContactMode::AfterStep,
             self_collision: SelfCollisionMode::Faithful,
             bending_height_floor: Self::BENDING_HEIGHT_FLOOR,
+            membrane: None,
         }
     }
 
