@@ -134,6 +134,9 @@ struct Run {
     frames: Vec<(f64, Vec<DVec3>, Vec<[u32; 3]>)>,
     min_edge: f64,
     penetrations: usize,
+    /// The most particles found inside an object at any check: after every remesh that changed the mesh
+    /// and at every sample (1 500 over the run).
+    most_inside: usize,
     /// Where the run was stopped by `RUN_WALL_CAP_S` or a failed step, s.
     stopped_at: Option<f64>,
     /// Why a step failed (non-finite state), when one did.
@@ -250,6 +253,7 @@ fn run(
     let mut last_report = Instant::now();
     let mut stopped_at = None;
     let mut failure = None;
+    let (mut most_inside, mut rebuilds) = (0, 0);
     let centre = {
         let x = c.cloth().positions();
         x.iter().copied().sum::<DVec3>() / x.len().max(1) as f64
@@ -263,6 +267,11 @@ fn run(
             failure =
                 Some(format!("diverged at t = {t:.3} s (a particle {far:.0} m from the cloth's start)"));
             return ControlFlow::Break(());
+        }
+        let rebuilt = c.stats().rebuilds != rebuilds;
+        if t - last_t >= every || rebuilt {
+            most_inside = most_inside.max(c.cloth().penetrations().len());
+            rebuilds = c.stats().rebuilds;
         }
         if t - last_t >= every {
             samples.push(sample(c, r.dt));
@@ -309,6 +318,7 @@ fn run(
         frames,
         min_edge: anima_cloth::oliveira::adaptive::min_rest_edge(cloth.mesh()),
         penetrations: cloth.penetrations().len(),
+        most_inside,
         stopped_at,
         failure,
         objects: object_meshes(cloth),
@@ -527,7 +537,7 @@ fn report(repo: &Repo, test: &Test, runs: &[Run], implicit: &[Run], membrane: &[
     }
     writeln!(
         s,
-        "\n| remesher | passes | rebuilds | refinements | idle refinements refused | simplifications kept / attempted (by vertex removal) | not attempted (nothing removable) | patches refused | pushed out | remesh wall (s) | particles inside at the end |"
+        "\n| remesher | passes | rebuilds | refinements | idle refinements refused | simplifications kept / attempted (by vertex removal) | not attempted (nothing removable) | patches refused | pushed out | remesh wall (s) | particles inside: at the end / most after any remesh or sample |"
     )?;
     writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|")?;
     for r in runs {
@@ -535,7 +545,7 @@ fn report(repo: &Repo, test: &Test, runs: &[Run], implicit: &[Run], membrane: &[
             let attempted = st.simplifications + st.simplifications_refused + st.simplifications_failed;
             writeln!(
                 s,
-                "| {} | {} | {} | {} | {} | {} / {} ({}) | {} | {} | {} | {:.2} | {} |",
+                "| {} | {} | {} | {} | {} | {} / {} ({}) | {} | {} | {} | {:.2} | {} / {} |",
                 r.label,
                 st.passes,
                 st.rebuilds,
@@ -548,7 +558,8 @@ fn report(repo: &Repo, test: &Test, runs: &[Run], implicit: &[Run], membrane: &[
                 st.failures + st.simplifications_refused,
                 st.pushed_out,
                 st.wall_s,
-                r.penetrations
+                r.penetrations,
+                r.most_inside
             )?;
         }
     }
@@ -959,7 +970,7 @@ fn work_precision(s: &mut String, what: &str, runs: &[&Run], reference: &Run, re
     let err = |r: &Run| rms(&r.points, &reference.points);
     writeln!(
         s,
-        "| run ({what}) | wall time (s) | steps | time per step (s) | V / E / F at the end | min rest edge (m) | RMS error vs {ref_label} (m) | particles inside at the end |"
+        "| run ({what}) | wall time (s) | steps | time per step (s) | V / E / F at the end | min rest edge (m) | RMS error vs {ref_label} (m) | particles inside: at the end / most after any remesh or sample |"
     )?;
     writeln!(s, "|---|---|---|---|---|---|---|---|")?;
     for r in runs {
@@ -968,7 +979,7 @@ fn work_precision(s: &mut String, what: &str, runs: &[&Run], reference: &Run, re
         let (wall, error) = (wall_cell(r), error_cell(r, err(r)));
         writeln!(
             s,
-            "| {} | {wall} | {} | {:.3e} | {} / {} / {} | {:.4} | {error} | {} |",
+            "| {} | {wall} | {} | {:.3e} | {} / {} / {} | {:.4} | {error} | {} / {} |",
             r.label,
             r.steps,
             r.wall_s / r.steps.max(1) as f64,
@@ -976,7 +987,8 @@ fn work_precision(s: &mut String, what: &str, runs: &[&Run], reference: &Run, re
             last.ne,
             last.nf,
             r.min_edge,
-            r.penetrations
+            r.penetrations,
+            r.most_inside
         )?;
     }
     let finished = |r: &&&Run| r.stopped_at.is_none();
