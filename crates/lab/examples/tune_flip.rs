@@ -243,7 +243,12 @@ fn main() {
     }
     // A gene whose pose entry is a world angle after the turn (near 2π, e.g. the landing's trunk) keeps
     // its interval, shifted by a turn.
-    let value = |g: &Gene| base.param(base.param_id(g.labels[0]).expect("gene label"));
+    let value = |g: &Gene| {
+        let id = base.param_id(g.labels[0]);
+        base.param(
+            id.unwrap_or_else(|| panic!("the controller has no parameter {} (TUNE_GENES)", g.labels[0])),
+        )
+    };
     let interval = |g: &Gene| {
         let shift = if value(g) > std::f64::consts::PI { 2.0 * std::f64::consts::PI } else { 0.0 };
         (g.lo + shift, g.hi + shift)
