@@ -489,21 +489,20 @@ fn push_out_new(
                     first_exit(&o.solid, x[i], dir, s, s + 4.0 * reach)
                 })
             };
-            let n = match exit {
+            // The surface point it goes to and the outward normal there: by the exit point, or out of
+            // the nearest surface point when no exit was found.
+            let (surface, n) = match exit {
                 Some(q) => {
-                    let prox = o.solid.proximity(q);
-                    let n = (q - prox.point).normalize_or_zero();
-                    x[i] = prox.point + n * 1e-6;
-                    n
+                    let surface = o.solid.proximity(q).point;
+                    (surface, (q - surface).normalize_or_zero())
                 }
                 None if inside => {
-                    let prox = o.solid.proximity(x[i]);
-                    let n = (prox.point - x[i]).normalize_or_zero();
-                    x[i] = prox.point + n * 1e-6;
-                    n
+                    let surface = o.solid.proximity(x[i]).point;
+                    (surface, (surface - x[i]).normalize_or_zero())
                 }
                 None => continue,
             };
+            x[i] = surface + n * 1e-6;
             let vn = v[i].dot(n);
             if vn < 0.0 {
                 v[i] -= n * vn;

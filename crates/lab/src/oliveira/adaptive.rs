@@ -268,12 +268,12 @@ fn run(
                 Some(format!("diverged at t = {t:.3} s (a particle {far:.0} m from the cloth's start)"));
             return ControlFlow::Break(());
         }
-        let rebuilt = c.stats().rebuilds != rebuilds;
-        if t - last_t >= every || rebuilt {
+        let sampling = t - last_t >= every;
+        if sampling || c.stats().rebuilds != rebuilds {
             most_inside = most_inside.max(c.cloth().penetrations().len());
             rebuilds = c.stats().rebuilds;
         }
-        if t - last_t >= every {
+        if sampling {
             samples.push(sample(c, r.dt));
             last_t = t;
         }
@@ -893,9 +893,10 @@ fn implicit_report(rk4: &[Run], runs: &[Run]) -> Result<String> {
     Ok(s)
 }
 
-/// The convergent model's table: the same drape with [`Options::membrane`]'s forces
+/// The convergent model's table: the same drape with `Options::membrane`'s forces
 /// ([`membrane_material`]), backward Euler at the same fixed step, uniform meshes up to the 49 × 49
-/// reference and the remeshers, with the reference's own distance from the next finer uniform mesh.
+/// reference and the remeshers; then whether the uniform meshes' errors fall as they are refined, and
+/// what a step costs per face on uniform and remeshed meshes.
 fn membrane_report(runs: &[Run]) -> Result<String> {
     let mut s = String::new();
     let Some(reference) = runs.iter().find(|r| r.label.contains("reference")) else {
@@ -965,7 +966,8 @@ fn membrane_report(runs: &[Run]) -> Result<String> {
 
 /// A table of `runs` with their errors against `reference` (RMS over the 5 × 5 material points at the
 /// evaluation times) and the verdict: each remesher that finished against the cheapest uniform mesh at
-/// least as accurate, and the best ratio.
+/// least as accurate and against the uniform meshes' wall time interpolated at its error, and the best
+/// ratio (the interpolated one where the remesher's error lies within the uniform meshes' range).
 fn work_precision(s: &mut String, what: &str, runs: &[&Run], reference: &Run, ref_label: &str) -> Result<()> {
     let err = |r: &Run| rms(&r.points, &reference.points);
     writeln!(
