@@ -12,7 +12,9 @@
 //! Forces are computed in two phases so that every particle sums its springs in one fixed order, whether
 //! rows run serially or in parallel: first the force of each spring on its first end, per class, into a
 //! buffer (each spring written once); then each particle adds the springs it starts and subtracts those
-//! it ends, class by class.
+//! it ends, class by class. The symplectic-Euler run interleaves the phases row by row ([`step_band`]),
+//! keeping only the few rows of first-end forces not yet used, with the same operations in the same
+//! order, so the same bits.
 
 use anima_geom::DVec3;
 #[cfg(feature = "parallel")]
@@ -29,6 +31,9 @@ pub(crate) struct GridStencil {
     forces: Vec<Vec<f64>>,
     /// The summed forces, laid out like `pos`.
     acc: Vec<f64>,
+    /// The first-end forces of the last [`halo`] + 1 rows, per class, for the fused step (see
+    /// [`step_band`]).
+    ring: Vec<f64>,
     /// The rows at the start of a symplectic-Euler run, to rerun it when it goes non-finite.
     saved_pos: Vec<f64>,
     saved_vel: Vec<f64>,
@@ -70,6 +75,7 @@ impl GridStencil {
             saved_pos: Vec::new(),
             saved_vel: Vec::new(),
             forces: (0..classes.len()).map(|_| zeros()).collect(),
+            ring: vec![0.0; ring_len(&classes, n)],
             classes,
             arch: pulp::Arch::new(),
             #[cfg(feature = "parallel")]
@@ -85,10 +91,7 @@ impl GridStencil {
         let (classes, forces) = (&self.classes, &self.forces);
         let f_in: &[DVec3] = f;
         for_each_chunk(&mut self.acc, w, parallel, |j, row| {
-            arch.dispatch(|| {
-                split_row(row, n, |c, i| f_in[j * n + i][c]);
-                sum_row(classes, |k| flat_row(&forces[k], w, j), |k| flat_end(classes, forces, w, k, j), row);
-            })
+            arch.dispatch(SumRowOp { classes, forces, f: f_in, n, j, row })
         });
         let acc = &self.acc;
         for_each_chunk(f, n, parallel, |j, out| arch.dispatch(|| join_row(flat_row(acc, w, j), n, out)));
@@ -177,23 +180,13 @@ impl GridStencil {
         true
     }
 
-    /// One step on the caller's thread (the banded run is the parallel one).
+    /// One step on the caller's thread (the banded run is the parallel one): the whole sheet as one
+    /// band, with no rows beside it.
     fn symplectic_euler_step(&mut self, h: f64, p: Particles<'_>) {
-        self.spring_forces(false);
-        let (n, w, arch) = (self.n, 3 * self.n, self.arch);
-        let (classes, forces) = (&self.classes, &self.forces);
-        let rows = self.pos.chunks_mut(w).zip(self.vel.chunks_mut(w)).zip(self.acc.chunks_mut(w));
-        for (j, ((pos, vel), acc)) in rows.enumerate() {
-            arch.dispatch(|| {
-                let range = j * n..(j + 1) * n;
-                let (m, inv_m, pinned) =
-                    (&p.masses[range.clone()], &p.inv_masses[range.clone()], &p.pinned[range]);
-                // Gravity's force first, then the springs, as `acceleration` sums them.
-                split_row(acc, n, |c, i| p.gravity[c] * m[i]);
-                sum_row(classes, |k| flat_row(&forces[k], w, j), |k| flat_end(classes, forces, w, k, j), acc);
-                move_row(n, h, acc, inv_m, pinned, pos, vel);
-            });
-        }
+        let (classes, n) = (&self.classes, self.n);
+        let (pos, vel, ring, acc) = (&mut self.pos, &mut self.vel, &mut self.ring, &mut self.acc);
+        let band = BandRows { first: 0, pos, vel, below: [&[], &[]], above: [&[], &[]] };
+        self.arch.dispatch(StepBandOp { classes, n, h, p, band, ring, acc: &mut acc[..3 * n] });
     }
 
     /// Copies (x, v) into rows.
@@ -225,9 +218,75 @@ impl GridStencil {
             for_each_chunk(buf, w, parallel, |j, out| {
                 let q = (j + class.dj < n)
                     .then(|| [flat_row(pos, w, j + class.dj), flat_row(vel, w, j + class.dj)]);
-                arch.dispatch(|| class_row(class, n, [flat_row(pos, w, j), flat_row(vel, w, j)], q, out))
+                arch.dispatch(ClassRowOp { class, n, p: [flat_row(pos, w, j), flat_row(vel, w, j)], q, out })
             });
         }
+    }
+}
+
+// The kernels below run under `pulp`'s dispatch as `WithSimd` values whose `with_simd` is
+// `#[inline(always)]` and calls only `#[inline(always)]` code, so that each is compiled in full for every
+// instruction set. A closure handed to `Arch::dispatch` is a function of its own, compiled for the
+// baseline and inlined into the AVX2 path only when LLVM chooses to; for these kernels it did not, and
+// the AVX2 path ran SSE2 code (seen in the profile of the 64 × 64 sheet).
+
+/// [`step_band`] as a dispatched kernel.
+struct StepBandOp<'a> {
+    classes: &'a [StencilClass],
+    n: usize,
+    h: f64,
+    p: Particles<'a>,
+    band: BandRows<'a>,
+    ring: &'a mut [f64],
+    acc: &'a mut [f64],
+}
+
+impl pulp::WithSimd for StepBandOp<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        step_band(self.classes, self.n, self.h, self.p, self.band, self.ring, self.acc);
+    }
+}
+
+/// [`class_row`] as a dispatched kernel.
+struct ClassRowOp<'a> {
+    class: &'a StencilClass,
+    n: usize,
+    p: [&'a [f64]; 2],
+    q: Option<[&'a [f64]; 2]>,
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for ClassRowOp<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        class_row(self.class, self.n, self.p, self.q, self.out);
+    }
+}
+
+/// Row j of the summed forces of [`GridStencil::add_forces`]: the forces in `f`, then the springs'.
+struct SumRowOp<'a> {
+    classes: &'a [StencilClass],
+    forces: &'a [Vec<f64>],
+    f: &'a [DVec3],
+    n: usize,
+    j: usize,
+    row: &'a mut [f64],
+}
+
+impl pulp::WithSimd for SumRowOp<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let Self { classes, forces, f, n, j, row } = self;
+        let w = 3 * n;
+        split_row(row, n, |c, i| f[j * n + i][c]);
+        sum_row(classes, |k| flat_row(&forces[k], w, j), |k| flat_end(classes, forces, w, k, j), row);
     }
 }
 
@@ -309,16 +368,26 @@ fn sum_row<'a>(
 ) {
     let w = row.len();
     for (k, class) in classes.iter().enumerate() {
-        for (a, b) in row.iter_mut().zip(start(k)) {
-            *a += *b;
-        }
-        if let Some(end) = end(k) {
-            let shift = class.dj_sign * class.di as isize;
-            let (lo, hi) = (shift.max(0) as usize, (w as isize + shift.min(0)) as usize);
-            let from = (lo as isize - shift) as usize;
-            for (a, b) in row[lo..hi].iter_mut().zip(&end[from..from + (hi - lo)]) {
-                *a -= *b;
+        let start = &start(k)[..w];
+        let Some(end) = end(k) else {
+            for (a, s) in row.iter_mut().zip(start) {
+                *a += *s;
             }
+            continue;
+        };
+        let shift = class.dj_sign * class.di as isize;
+        let (lo, hi) = (shift.max(0) as usize, (w as isize + shift.min(0)) as usize);
+        let from = (lo as isize - shift) as usize;
+        for (a, s) in row[..lo].iter_mut().zip(&start[..lo]) {
+            *a += *s;
+        }
+        // Start and end in one pass, each entry (a + s) − e as two passes would give it.
+        let ends = &end[from..from + (hi - lo)];
+        for ((a, s), e) in row[lo..hi].iter_mut().zip(&start[lo..hi]).zip(ends) {
+            *a = *a + *s - *e;
+        }
+        for (a, s) in row[hi..].iter_mut().zip(&start[hi..]) {
+            *a += *s;
         }
     }
 }
@@ -335,6 +404,104 @@ fn move_row(n: usize, h: f64, acc: &[f64], inv_m: &[f64], pinned: &[bool], pos: 
             v[i] += a * h;
             x[i] += v[i] * h;
         }
+    }
+}
+
+/// How many rows a spring reaches across: the rows of old state a band needs beyond its own.
+fn halo(classes: &[StencilClass]) -> usize {
+    classes.iter().map(|c| c.dj).max().unwrap_or(0)
+}
+
+/// The length of [`step_band`]'s ring: per class, [`halo`] + 1 rows of first-end forces.
+fn ring_len(classes: &[StencilClass], n: usize) -> usize {
+    classes.len() * (halo(classes) + 1) * 3 * n
+}
+
+/// Consecutive rows `first..` of the sheet that one thread moves (`pos`, `vel`), and copies of the
+/// state before the step of the [`halo`] rows before them (`below`, empty for the first band) and after
+/// them (`above`, as many as the sheet has, empty for the last band), positions then velocities.
+struct BandRows<'a> {
+    first: usize,
+    pos: &'a mut [f64],
+    vel: &'a mut [f64],
+    below: [&'a [f64]; 2],
+    above: [&'a [f64]; 2],
+}
+
+impl BandRows<'_> {
+    /// Row r of the state before the step, positions (`c` = 0) or velocities (1): r lies in the band
+    /// and has not moved yet, or lies in a halo.
+    #[inline(always)]
+    fn old(&self, c: usize, r: usize, w: usize) -> &[f64] {
+        let own = if c == 0 { &*self.pos } else { &*self.vel };
+        let last = self.first + own.len() / w;
+        let (buf, from) = if r < self.first {
+            (self.below[c], self.first - self.below[c].len() / w)
+        } else if r < last {
+            (own, self.first)
+        } else {
+            (self.above[c], last)
+        };
+        &buf[(r - from) * w..(r - from + 1) * w]
+    }
+}
+
+/// One symplectic-Euler step of a band of rows in one pass, row by row: the springs that start in row
+/// j ([`class_row`], from rows j.. that have not moved yet), then row j's sum ([`sum_row`], gravity
+/// first) and its move ([`move_row`]). A spring's force is needed only until the row it ends in has
+/// moved, [`halo`] rows on, so each class keeps its last [`halo`] + 1 rows in `ring` (in L1 cache, where
+/// a buffer for every row of every class would not be). A band that does not start the sheet first
+/// computes the springs that end in its rows from the rows below it, as the band below does for itself:
+/// the same operations on the same values, so every band gives the bits of the serial step.
+#[inline(always)]
+fn step_band(
+    classes: &[StencilClass],
+    n: usize,
+    h: f64,
+    p: Particles<'_>,
+    band: BandRows<'_>,
+    ring: &mut [f64],
+    acc: &mut [f64],
+) {
+    let w = 3 * n;
+    let depth = halo(classes) + 1;
+    let slot = |k: usize, r: usize| (k * depth + r % depth) * w;
+    let first = band.first;
+    let last = first + band.pos.len() / w;
+    // A function, not a closure: a closure is compiled on its own, for the baseline instruction set,
+    // unless LLVM chooses to inline it (see `StepBandOp`).
+    #[inline(always)]
+    fn springs_of_row(class: &StencilClass, n: usize, band: &BandRows<'_>, r: usize, out: &mut [f64]) {
+        let w = 3 * n;
+        let q = (r + class.dj < n).then(|| [band.old(0, r + class.dj, w), band.old(1, r + class.dj, w)]);
+        class_row(class, n, [band.old(0, r, w), band.old(1, r, w)], q, out);
+    }
+    for r in first.saturating_sub(depth - 1)..first {
+        for (k, class) in classes.iter().enumerate() {
+            if r + class.dj >= first {
+                springs_of_row(class, n, &band, r, &mut ring[slot(k, r)..slot(k, r) + w]);
+            }
+        }
+    }
+    for j in first..last {
+        for (k, class) in classes.iter().enumerate() {
+            springs_of_row(class, n, &band, j, &mut ring[slot(k, j)..slot(k, j) + w]);
+        }
+        let range = j * n..(j + 1) * n;
+        split_row(acc, n, |c, i| p.gravity[c] * p.masses[range.start + i]);
+        let ring = &*ring;
+        sum_row(
+            classes,
+            |k| &ring[slot(k, j)..slot(k, j) + w],
+            |k| {
+                (j >= classes[k].dj)
+                    .then(|| &ring[slot(k, j - classes[k].dj)..slot(k, j - classes[k].dj) + w])
+            },
+            acc,
+        );
+        let local = (j - first) * w..(j - first + 1) * w;
+        let (inv_m, pinned) = (&p.inv_masses[range.clone()], &p.pinned[range]);
+        move_row(n, h, acc, inv_m, pinned, &mut band.pos[local.clone()], &mut band.vel[local]);
     }
 }
 
@@ -390,26 +557,31 @@ fn for_each_chunk<T: Send>(
     }
 }
 
-/// The parallel symplectic-Euler run: the rows split into one band per thread, each thread computing
-/// the springs that start in its rows and then moving its rows, with a barrier after each phase.
+/// The parallel symplectic-Euler run: the rows split into one band per thread, each thread moving its
+/// band with [`step_band`], one barrier a step.
 ///
-/// The threads are started once, with the first parallel run, and wait between runs; a band's rows sit
-/// behind read–write locks so that the threads share them without unsafe code. The barriers order the
-/// phases, so no lock is ever contended: in the first phase every thread reads every band's positions
-/// and velocities and writes its own forces, in the second it reads every band's forces and writes its
-/// own positions and velocities. A barrier is a spin on an atomic counter, under a microsecond, where a
-/// pool's fork and join per pass, or threads started for every run, cost more than a small sheet's pass
-/// (measured: threads started per 1/30 s frame made two threads slower than one on the 32 × 32 sheet).
+/// A band needs the state before the step of the [`halo`] rows on either side of it, which its
+/// neighbours move in the same step; so at the start of a step every band copies its first and last
+/// [`halo`] rows into its halo buffer, all wait at the barrier, and then each moves its rows, reading its
+/// neighbours' halos. Halos alternate between two buffers from step to step: a band overwrites the one
+/// it wrote two steps before, which its neighbours stopped reading before they reached the last barrier.
+///
+/// The threads are started once, with the first parallel run, and wait between runs; halos sit behind
+/// read–write locks so that the threads share them without unsafe code, and the barrier and the
+/// alternation keep the locks uncontended. A barrier is a spin on an atomic counter, under a
+/// microsecond, where a pool's fork and join per pass, or threads started for every run, cost more than
+/// a small sheet's pass (measured: threads started per 1/30 s frame made two threads slower than one on
+/// the 32 × 32 sheet).
 #[cfg(feature = "parallel")]
 mod banded {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::mpsc::{Receiver, Sender, channel};
-    use std::sync::{Arc, Mutex, RwLock, RwLockReadGuard};
+    use std::sync::{Arc, Mutex, RwLock};
     use std::thread::JoinHandle;
 
     use anima_geom::DVec3;
 
-    use super::{Particles, StencilClass, class_row, join_row, move_row, split_row, sum_row};
+    use super::{BandRows, Particles, StencilClass, StepBandOp, halo, join_row, ring_len};
 
     /// The most threads a run uses.
     const MAX_BANDS: usize = 8;
@@ -456,17 +628,57 @@ mod banded {
         h: f64,
     }
 
-    /// Consecutive rows `first..first + rows` and their buffers, laid out as the flat ones.
+    /// Consecutive rows `first..first + rows`: their state, which only the band's thread touches during
+    /// a run, and their halos, which its neighbours read.
     #[derive(Debug)]
     struct Band {
         first: usize,
         rows: usize,
-        pos: RwLock<Vec<f64>>,
-        vel: RwLock<Vec<f64>>,
-        /// Per class.
-        forces: RwLock<Vec<Vec<f64>>>,
-        /// One row of summed forces.
-        acc: Mutex<Vec<f64>>,
+        state: Mutex<BandState>,
+        /// By step parity: the band's first [`halo`] rows of positions, of velocities, then its last
+        /// [`halo`] rows of positions, of velocities, as they were before the step.
+        halos: [RwLock<Vec<f64>>; 2],
+    }
+
+    /// The band's positions, velocities, ring (see [`step_band`]) and one row of summed forces, in one
+    /// buffer with [`PAD`] at either end.
+    #[derive(Debug)]
+    struct BandState {
+        buf: Vec<f64>,
+        rows_len: usize,
+        ring_len: usize,
+    }
+
+    /// Doubles of padding at both ends of every buffer a band's thread writes: two cache lines, the pair
+    /// that the processor's adjacent-line prefetch moves together, so that no two threads write into
+    /// one pair. Without it, a band's buffers could lie beside another band's, and which band's steps
+    /// ran up to 35 % slower changed with where the allocator happened to put them (measured on the 32 ×
+    /// 32 sheet).
+    const PAD: usize = 16;
+
+    impl BandState {
+        fn new(rows_len: usize, ring_len: usize, w: usize) -> Self {
+            Self { buf: vec![0.0; PAD + 2 * rows_len + ring_len + w + PAD], rows_len, ring_len }
+        }
+
+        /// Positions, velocities, ring and summed forces.
+        fn parts(&mut self) -> [&mut [f64]; 4] {
+            let end = self.buf.len() - PAD;
+            let (pos, rest) = self.buf[PAD..end].split_at_mut(self.rows_len);
+            let (vel, rest) = rest.split_at_mut(self.rows_len);
+            let (ring, acc) = rest.split_at_mut(self.ring_len);
+            [pos, vel, ring, acc]
+        }
+    }
+
+    /// A halo buffer of `len` doubles, padded like [`BandState`].
+    fn padded(len: usize) -> Vec<f64> {
+        vec![0.0; PAD + len + PAD]
+    }
+
+    /// The halo in a padded buffer.
+    fn unpadded(buf: &[f64]) -> &[f64] {
+        &buf[PAD..buf.len() - PAD]
     }
 
     /// The particles' constants, copied in at every run.
@@ -489,14 +701,6 @@ mod banded {
         barrier: SpinBarrier,
     }
 
-    type Guards<'a, T> = [Option<RwLockReadGuard<'a, T>>; MAX_BANDS];
-
-    /// Row r of the sheet, in the band that holds it.
-    fn band_row<'g>(guards: &'g Guards<'_, Vec<f64>>, rpb: usize, w: usize, r: usize) -> &'g [f64] {
-        let local = r % rpb;
-        &guards[r / rpb].as_ref().expect("band")[local * w..(local + 1) * w]
-    }
-
     /// Bands, one per thread, of a sheet of n rows: as many as the machine has cores, at most
     /// [`MAX_BANDS`], each of at least [`MIN_ROWS`] rows; 1 means no banded run.
     pub(super) fn band_count(n: usize) -> usize {
@@ -506,13 +710,17 @@ mod banded {
 
     impl Bands {
         /// Splits n rows over [`band_count`] bands and starts their threads, unless they are there
-        /// already; false when there would be only one band.
+        /// already; false when there would be only one band, or a band would be narrower than a halo.
         pub fn prepare(&mut self, n: usize, classes: &[StencilClass], arch: pulp::Arch) -> bool {
             let count = band_count(n);
             if count < 2 {
                 return false;
             }
             let rows_per_band = n.div_ceil(count);
+            let depth = halo(classes);
+            if n - (n.div_ceil(rows_per_band) - 1) * rows_per_band < depth.max(1) {
+                return false;
+            }
             if let Some(team) = &self.team
                 && team.shared.n == n
                 && team.shared.rows_per_band == rows_per_band
@@ -526,14 +734,11 @@ mod banded {
                 .map(|b| {
                     let first = b * rows_per_band;
                     let rows = rows_per_band.min(n - first);
-                    let zeros = || vec![0.0; rows * w];
                     Band {
                         first,
                         rows,
-                        pos: RwLock::new(zeros()),
-                        vel: RwLock::new(zeros()),
-                        forces: RwLock::new((0..classes.len()).map(|_| zeros()).collect()),
-                        acc: Mutex::new(vec![0.0; w]),
+                        state: Mutex::new(BandState::new(rows * w, ring_len(classes, n), w)),
+                        halos: [(); 2].map(|()| RwLock::new(padded(4 * depth * w))),
                     }
                 })
                 .collect();
@@ -590,8 +795,10 @@ mod banded {
             }
             for band in &shared.bands {
                 let range = band.first * w..(band.first + band.rows) * w;
-                band.pos.write().expect("lock").copy_from_slice(&pos[range.clone()]);
-                band.vel.write().expect("lock").copy_from_slice(&vel[range]);
+                let mut state = band.state.lock().expect("lock");
+                let [own_pos, own_vel, ..] = state.parts();
+                own_pos.copy_from_slice(&pos[range.clone()]);
+                own_vel.copy_from_slice(&vel[range]);
             }
             let job = Job { steps, h };
             for (jobs, _) in &team.workers {
@@ -603,8 +810,10 @@ mod banded {
                 done.recv().expect("a band's thread ended its run");
             }
             for band in &shared.bands {
-                for (src, dst) in [(&band.pos, &mut *x), (&band.vel, &mut *v)] {
-                    for (r, row) in src.read().expect("lock").chunks(w).enumerate() {
+                let mut state = band.state.lock().expect("lock");
+                let [own_pos, own_vel, ..] = state.parts();
+                for (src, dst) in [(&*own_pos, &mut *x), (&*own_vel, &mut *v)] {
+                    for (r, row) in src.chunks(w).enumerate() {
                         join_row(row, n, &mut dst[(band.first + r) * n..(band.first + r + 1) * n]);
                     }
                 }
@@ -624,57 +833,53 @@ mod banded {
             // A panic here would leave the other threads waiting at a barrier for ever: it poisons the
             // barrier, and they panic in turn (the caller's thread with them).
             let _poison = PoisonOnPanic(&self.barrier);
-            let (n, w, rpb) = (self.n, 3 * self.n, self.rows_per_band);
+            let (n, w) = (self.n, 3 * self.n);
+            let part = halo(&self.classes) * w;
             let band = &self.bands[b];
-            let mut acc = band.acc.lock().expect("lock");
-            let p = self.particles.read().expect("lock");
-            let read = |lock: fn(&Band) -> &RwLock<Vec<f64>>| -> Guards<'_, Vec<f64>> {
-                std::array::from_fn(|k| self.bands.get(k).map(|b| lock(b).read().expect("lock")))
+            let mut state = band.state.lock().expect("lock");
+            let [pos, vel, ring, acc] = state.parts();
+            let data = self.particles.read().expect("lock");
+            let p = Particles {
+                masses: &data.masses,
+                inv_masses: &data.inv_masses,
+                pinned: &data.pinned,
+                gravity: data.gravity,
             };
-            for _ in 0..job.steps {
+            let (below, above) = (b.checked_sub(1).map(|b| &self.bands[b]), self.bands.get(b + 1));
+            for step in 0..job.steps {
+                let parity = step % 2;
                 {
-                    let (pos, vel) = (read(|b| &b.pos), read(|b| &b.vel));
-                    let mut forces = band.forces.write().expect("lock");
-                    for (class, out) in self.classes.iter().zip(forces.iter_mut()) {
-                        for (local, out) in out.chunks_mut(w).enumerate() {
-                            let j = band.first + local;
-                            let row = |guards, r| band_row(guards, rpb, w, r);
-                            let q = (j + class.dj < n)
-                                .then(|| [row(&pos, j + class.dj), row(&vel, j + class.dj)]);
-                            let here = [row(&pos, j), row(&vel, j)];
-                            self.arch.dispatch(|| class_row(class, n, here, q, out));
-                        }
-                    }
+                    let mut out = band.halos[parity].write().expect("lock");
+                    let end = out.len() - PAD;
+                    let (head, tail) = out[PAD..end].split_at_mut(2 * part);
+                    let end = pos.len() - part;
+                    head[..part].copy_from_slice(&pos[..part]);
+                    head[part..].copy_from_slice(&vel[..part]);
+                    tail[..part].copy_from_slice(&pos[end..]);
+                    tail[part..].copy_from_slice(&vel[end..]);
                 }
                 self.barrier.wait();
-                {
-                    let forces: [Option<RwLockReadGuard<'_, Vec<Vec<f64>>>>; MAX_BANDS] =
-                        std::array::from_fn(|k| self.bands.get(k).map(|b| b.forces.read().expect("lock")));
-                    let force_row = |k: usize, r: usize| -> &[f64] {
-                        let local = r % rpb;
-                        &forces[r / rpb].as_ref().expect("band")[k][local * w..(local + 1) * w]
-                    };
-                    let (mut pos, mut vel) =
-                        (band.pos.write().expect("lock"), band.vel.write().expect("lock"));
-                    for (local, (x, v)) in pos.chunks_mut(w).zip(vel.chunks_mut(w)).enumerate() {
-                        let j = band.first + local;
-                        let range = j * n..(j + 1) * n;
-                        let (m, inv_m, pinned) =
-                            (&p.masses[range.clone()], &p.inv_masses[range.clone()], &p.pinned[range]);
-                        self.arch.dispatch(|| {
-                            let acc = &mut acc[..];
-                            split_row(acc, n, |c, i| p.gravity[c] * m[i]);
-                            sum_row(
-                                &self.classes,
-                                |k| force_row(k, j),
-                                |k| (j >= self.classes[k].dj).then(|| force_row(k, j - self.classes[k].dj)),
-                                acc,
-                            );
-                            move_row(n, job.h, acc, inv_m, pinned, x, v);
-                        });
-                    }
-                }
-                self.barrier.wait();
+                let below = below.map(|band| band.halos[parity].read().expect("lock"));
+                let above = above.map(|band| band.halos[parity].read().expect("lock"));
+                let (below, above) =
+                    (below.as_deref().map(|h| unpadded(h)), above.as_deref().map(|h| unpadded(h)));
+                let rows = BandRows {
+                    first: band.first,
+                    pos: &mut *pos,
+                    vel: &mut *vel,
+                    below: below.map_or([&[], &[]], |h| [&h[2 * part..3 * part], &h[3 * part..]]),
+                    above: above.map_or([&[], &[]], |h| [&h[..part], &h[part..2 * part]]),
+                };
+                let (classes, h) = (&self.classes[..], job.h);
+                self.arch.dispatch(StepBandOp {
+                    classes,
+                    n,
+                    h,
+                    p,
+                    band: rows,
+                    ring: &mut *ring,
+                    acc: &mut *acc,
+                });
             }
         }
     }
