@@ -265,9 +265,14 @@ fn main() {
     let spacings: Vec<f64> = std::env::var("TUNE_SPACINGS").map_or(vec![nunes::FLIP_SPACING], |v| {
         v.split(',').map(|x| x.trim().parse().expect("spacing")).collect()
     });
+    // `TUNE_WORST=w`: the mean score plus w times the worst spacing's, so that the search does not
+    // buy the other spacings with one it gives up (default 0: the mean alone).
+    let worst_weight: f64 = std::env::var("TUNE_WORST").ok().and_then(|v| v.parse().ok()).unwrap_or(0.0);
     let objective = |x: &[f64]| {
         let c = apply(&base, x);
-        spacings.iter().map(|&d| score(c.clone(), d)).sum::<f64>() / spacings.len() as f64
+        let scores: Vec<f64> = spacings.iter().map(|&d| score(c.clone(), d)).collect();
+        let worst = scores.iter().copied().fold(f64::INFINITY, f64::min);
+        scores.iter().sum::<f64>() / scores.len() as f64 + worst_weight * worst
     };
     eprintln!("x0 score {:.3}", objective(&x0));
     let out_path = std::path::Path::new("target/nunes").join(format!("backflip-tuned-{seed}.ron"));
