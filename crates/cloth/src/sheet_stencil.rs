@@ -152,6 +152,13 @@ impl GridStencil {
         Err(steps)
     }
 
+    /// Splits the banded run into `count` bands whatever the machine's cores (tests: a band with
+    /// neighbours on both sides needs at least three).
+    #[cfg(all(test, feature = "parallel"))]
+    pub fn set_bands(&mut self, count: usize) {
+        self.bands.count = Some(count);
+    }
+
     /// Threads [`GridStencil::run_symplectic_euler`] uses with `parallel`: one per band of rows.
     pub fn fused_threads(&self) -> usize {
         #[cfg(feature = "parallel")]
@@ -650,6 +657,8 @@ mod banded {
     #[derive(Debug, Default)]
     pub(super) struct Bands {
         team: Option<Team>,
+        /// Bands to use instead of [`band_count`]'s (tests: more bands than the machine has cores).
+        pub count: Option<usize>,
     }
 
     impl Clone for Bands {
@@ -769,7 +778,7 @@ mod banded {
         /// Splits n rows over [`band_count`] bands and starts their threads, unless they are there
         /// already; false when there would be only one band, or a band would be narrower than a halo.
         pub fn prepare(&mut self, n: usize, classes: &[StencilClass], arch: pulp::Arch) -> bool {
-            let count = band_count(n);
+            let count = self.count.unwrap_or_else(|| band_count(n));
             if count < 2 {
                 return false;
             }

@@ -797,6 +797,26 @@ mod stencil_tests {
         assert_eq!((xa, va), (xb, vb));
     }
 
+    #[cfg(feature = "parallel")]
+    #[test]
+    fn fused_symplectic_euler_in_three_and_four_bands_is_bit_identical_to_serial() {
+        // Bands of 11 rows (three) and of 9, 9, 9 and 6 (four): the middle bands read halos on both
+        // sides, which two bands, all a two-core machine makes, never do.
+        let spec = SheetSpec::standard(33);
+        let mut serial = spec.build();
+        let (x0, v0) = perturbed(&spec);
+        let (mut xa, mut va) = (x0.clone(), v0.clone());
+        assert_eq!(serial.run_symplectic_euler(40, 1e-4, &mut xa, &mut va), Some(Ok(())));
+        for count in [3, 4] {
+            let mut banded = spec.build();
+            banded.parallel = true;
+            banded.stencil.as_mut().expect("a sheet's stencil").set_bands(count);
+            let (mut xb, mut vb) = (x0.clone(), v0.clone());
+            assert_eq!(banded.run_symplectic_euler(40, 1e-4, &mut xb, &mut vb), Some(Ok(())));
+            assert_eq!((&xa, &va), (&xb, &vb), "{count} bands");
+        }
+    }
+
     #[test]
     fn parallel_sheet_forces_are_bit_identical_to_serial() {
         let spec = SheetSpec::standard(33);
