@@ -342,6 +342,8 @@ fn class_row(class: &StencilClass, n: usize, p: [&[f64]; 2], q: Option<[&[f64]; 
     let (oy, oz) = rest.split_at_mut(n);
     let (ox, oy, oz) = (&mut ox[lo..hi], &mut oy[lo..hi], &mut oz[lo..hi]);
     let (k, c, rest_length) = (class.k, class.c, class.rest);
+    // The short row's loop and the block's call `spring_force` alike; one routine for both, through
+    // arrays built by `map`, was measured 2–3 times slower (it no longer vectorised).
     if len < BLOCK {
         for t in 0..len {
             [ox[t], oy[t], oz[t]] = spring_force(
@@ -717,9 +719,9 @@ mod banded {
 
     /// Doubles of padding at both ends of every buffer a band's thread writes: two cache lines, the pair
     /// that the processor's adjacent-line prefetch moves together, so that no two threads write into
-    /// one pair. Without it, a band's buffers could lie beside another band's, and which band's steps
-    /// ran up to 35 % slower changed with where the allocator happened to put them (measured on the 32 ×
-    /// 32 sheet).
+    /// one pair. Without it, which band's steps ran up to 35 % slower changed with where the allocator
+    /// happened to put the bands' buffers; with it, they did not (measured on the 32 × 32 sheet). That
+    /// sharing a line pair was the cause is the likeliest reading, not one a counter confirmed.
     const PAD: usize = 16;
 
     impl BandState {
