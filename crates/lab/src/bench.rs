@@ -73,16 +73,21 @@ fn run_sheet(
     solver: Option<LinearSolver>,
     control: StepControl,
 ) -> Option<(Vec<DVec3>, f64)> {
-    run_sheet_from(scene, scene.spec.positions(), integrator, solver, control)
+    let configure = |stepper: &mut Stepper<DVec3>| {
+        if let Some(s) = solver {
+            stepper.set_linear_solver(s);
+        }
+    };
+    run_sheet_from(scene, scene.spec.positions(), integrator, control, &configure)
 }
 
-/// [`run_sheet`] from the positions `start` (at rest).
+/// [`run_sheet`] from the positions `start` (at rest), with the stepper set up by `configure`.
 fn run_sheet_from(
     scene: &BenchSheet,
     start: Vec<DVec3>,
     integrator: Integrator,
-    solver: Option<LinearSolver>,
     control: StepControl,
+    configure: &dyn Fn(&mut Stepper<DVec3>),
 ) -> Option<(Vec<DVec3>, f64)> {
     let net = scene.spec.build();
     let n = net.n_particles();
@@ -91,9 +96,7 @@ fn run_sheet_from(
         StepControl::Adaptive { dt_initial, .. } => dt_initial,
     };
     let mut sim = NetworkSim::new(net, start, integrator, dt);
-    if let Some(s) = solver {
-        sim.stepper_mut().set_linear_solver(s);
-    }
+    configure(sim.stepper_mut());
     let start = Instant::now();
     let ok = match control {
         StepControl::Constant { dt } => {
@@ -110,6 +113,7 @@ fn run_sheet_from(
         }
         adaptive => {
             let mut stepper = Stepper::new(integrator, n);
+            configure(&mut stepper);
             let mut state = sim.state.clone();
             let mut scratch = State::zeros(n);
             let r = integrate(
@@ -627,7 +631,8 @@ fn sensitivity_section(repo: &Repo, scenes: &[BenchSheet]) -> Result<String> {
         ] {
             let control = StepControl::Constant { dt };
             let runs = [0.0, 1e-9].map(|eps| {
-                run_sheet_from(scene, nudged_grid(&scene.spec, eps), integrator, None, control).map(|r| r.0)
+                run_sheet_from(scene, nudged_grid(&scene.spec, eps), integrator, control, &|_| ())
+                    .map(|r| r.0)
             });
             let [Some(a), Some(b)] = runs else {
                 let _ = writeln!(out, "| N = {n} | {integrator} | {dt:.2e} s | diverged | — | — |");
@@ -669,24 +674,27 @@ fn converged_alpha_table(repo: &Repo, scenes: &[BenchSheet]) -> Result<String> {
     for per_s in [60.0, 120.0, 240.0, 480.0, 960.0] {
         let dt = 1.0 / per_s;
         eprintln!("anima-lab: {} — generalized-alpha converged at 1/{per_s} s …", scene.name);
-        let mut sim =
-            NetworkSim::new(scene.spec.build(), scene.spec.positions(), Integrator::GeneralizedAlpha, dt);
-        sim.stepper_mut().set_linear_solver(LinearSolver::RigidAggregation {
-            tolerance: CONVERGED_CG_TOLERANCE,
-            max_iterations: 1000,
-        });
-        sim.stepper_mut().set_newton_iterations(CONVERGED_NEWTON);
-        sim.stepper_mut().set_newton_contraction(0.0);
-        if sim.run((scene.duration / dt).round() as usize).is_err() {
+        let converged = |stepper: &mut Stepper<DVec3>| {
+            stepper.set_linear_solver(LinearSolver::RigidAggregation {
+                tolerance: CONVERGED_CG_TOLERANCE,
+                max_iterations: 1000,
+            });
+            stepper.set_newton_iterations(CONVERGED_NEWTON);
+            stepper.set_newton_contraction(0.0);
+        };
+        let control = StepControl::Constant { dt };
+        let positions = scene.spec.positions();
+        let Some((x, _)) =
+            run_sheet_from(scene, positions, Integrator::GeneralizedAlpha, control, &converged)
+        else {
             let _ = writeln!(out, "| 1/{per_s:.0} s | failed | — |");
             continue;
-        }
-        let x = &sim.state.x;
+        };
         let _ = writeln!(
             out,
             "| 1/{per_s:.0} s | {:.2} mm | {:.2} mm |",
-            rms(x, &reference) * 1e3,
-            scene.com_reference.map_or(f64::NAN, |r| net.centre_of_mass(x).distance(r)) * 1e3
+            rms(&x, &reference) * 1e3,
+            scene.com_reference.map_or(f64::NAN, |r| net.centre_of_mass(&x).distance(r)) * 1e3
         );
     }
     out.push('\n');

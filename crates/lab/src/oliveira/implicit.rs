@@ -415,34 +415,31 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
     repo.write_text("docs/reproduction/oliveira-implicit.md", &doc)
 }
 
-/// The methods of the sensitivity study: both references and generalised-α at the steps a user would
-/// choose, with contact in the solve and after it.
-fn sensitive_methods() -> Vec<Method> {
-    let [(_, faithful), (_, converged)] = references();
-    vec![
-        faithful,
-        converged,
+/// The methods of the sensitivity study: both references (with their cache names) and generalised-α
+/// at the steps a user would choose, with contact in the solve and after it.
+fn sensitive_methods() -> Vec<(Method, Option<&'static str>)> {
+    let references = references().map(|(name, m)| (m, Some(name)));
+    let large = [
         Method::in_solve(1.0 / 60.0),
         Method::in_solve(1.0 / 120.0),
         Method::in_solve(1.0 / 240.0),
         Method::implicit(Integrator::GeneralizedAlpha, 1.0 / 60.0),
-    ]
+    ];
+    references.into_iter().chain(large.map(|m| (m, None))).collect()
 }
 
-/// Runs each of [`sensitive_methods`] with [`PERTURBED_GRAVITY`] and appends a table row: how far it
-/// moved from the same run in `rows`.
+/// Runs each of [`sensitive_methods`] with [`PERTURBED_GRAVITY`] (a reference's run cached beside it)
+/// and appends a table row: how far it moved from the same run in `rows`.
 fn sensitivity_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> Result<()> {
-    let [(faithful_name, _), (converged_name, _)] = references();
-    for (i, m) in sensitive_methods().into_iter().enumerate() {
+    for (m, cached) in sensitive_methods() {
         let Some(Row { outcome: Some(base), vs_faithful, .. }) = rows.iter().find(|r| r.method == m) else {
             continue;
         };
         let perturbed = Method { gravity_scale: PERTURBED_GRAVITY, ..m };
         eprintln!("anima-lab: {} — {} at {}, perturbed", d.short_title, m.label(), m.step_label());
-        let moved = match i {
-            0 => reference(repo, d, &perturbed, &format!("{faithful_name}-perturbed"))?,
-            1 => reference(repo, d, &perturbed, &format!("{converged_name}-perturbed"))?,
-            _ => run(repo, d, &perturbed)?,
+        let moved = match cached {
+            Some(name) => reference(repo, d, &perturbed, &format!("{name}-perturbed"))?,
+            None => run(repo, d, &perturbed)?,
         };
         let _ = writeln!(
             out,
