@@ -96,7 +96,7 @@ const STAND_GENES: &[Gene] = &[
 /// trunk's rotation rate (`trunk_rate`), the launch that decides the rotation (the pusher's push E3,
 /// the acrobat's push-off E5 and foot placement E2/E3), and the landing's E8 — for a flip that lands
 /// standing over the range of spacings (`TUNE_SPACINGS`). It needs a controller whose E6 and E7 use
-/// such `Feedback` targets: `FLIP_RON=crates/lab/examples/backflip-spacing-wip.ron`.
+/// such `Feedback` targets, as `assets/controllers/backflip.ron` does.
 const FLIGHT_GENES: &[Gene] = &[
     g(&["B-ACRO-BODY/E6/acrobat/waist"], -0.2, 1.2),
     g(&["B-ACRO-BODY/E6/acrobat/waist/k0"], -0.15, 0.15),
