@@ -80,6 +80,9 @@ pub struct Sensors {
     /// Horizontal distance from the support foot's centre (the mean of both feet on double support)
     /// to the centre of mass, m, signed along the facing direction; `None` in flight.
     pub com_over_support: Option<f64>,
+    /// Inclination of the ground under the centre of mass, rad, positive rising in the facing
+    /// direction (0 without a ground): what a walker sees of the terrain ahead of its feet.
+    pub ground_slope: f64,
     pub layout: BodyLayout,
     /// +1 facing +x, −1 facing −x.
     pub facing: f64,
@@ -129,6 +132,7 @@ impl Sensors {
             mass: 0.0,
             support: Support::None,
             com_over_support: None,
+            ground_slope: 0.0,
             layout,
             facing: sk.sign(),
         })
@@ -231,6 +235,8 @@ impl World {
             Support::None => None,
         };
         sensors.com_over_support = x_ref.map(|x| sensors.facing * (sensors.com[0] - x));
+        sensors.ground_slope =
+            self.settings().ground.map_or(0.0, |g| sensors.facing * g.slope_at(sensors.com[0]));
         Ok(())
     }
 }
@@ -331,6 +337,13 @@ pub mod catalogue {
     /// m/s. Continuous, not a switch.
     pub fn com_speed(s: &Sensors) -> f64 {
         s.facing * s.com_velocity[0]
+    }
+
+    /// The inclination of the ground under the centre of mass, anima's: rad, positive uphill in the
+    /// facing direction ([`Sensors::ground_slope`]). Continuous, not a switch; a walker's feedback
+    /// targets can lean into a slope with it and leave the flat gait as it is.
+    pub fn ground_slope(s: &Sensors) -> f64 {
+        s.ground_slope
     }
 
     /// The trunk's rotation rate, anima's: the abdomen's angular velocity (the pelvis's without an

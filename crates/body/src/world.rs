@@ -61,6 +61,15 @@ impl Ground {
         }
     }
 
+    /// Inclination of the ground at x, rad, positive rising towards +x: the slope's angle past its
+    /// start, 0 on the flat and on the treads of stairs (whose risers are vertical steps, not a slope).
+    pub fn slope_at(&self, x: f64) -> f64 {
+        match self.relief {
+            Relief::Slope { from_x, degrees } if x > from_x => degrees.to_radians(),
+            Relief::Flat | Relief::Slope { .. } | Relief::Stairs { .. } => 0.0,
+        }
+    }
+
     /// The ground's pieces as fixed boxes: (centre, angle about z, half-extents in x and y). A box's top
     /// face is the ground; boxes are 10 m deep and reach 1 km each way (and across, in z).
     fn pieces(&self) -> Vec<([f64; 2], f64, [f64; 2])> {

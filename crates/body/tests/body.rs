@@ -731,10 +731,36 @@ fn the_ground_height_follows_its_relief() {
     let h: Vec<f64> = [0.9, 1.0, 1.4, 1.5, 2.4, 9.0].iter().map(|&x| stairs.height_at(x)).collect();
     let expected = [0.5, 0.6, 0.6, 0.7, 0.8, 0.8];
     assert!(h.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-12), "{h:?}");
+    // Its inclination: the slope's angle past its start, 0 before it, on the flat and on stairs' treads.
+    let quarter = std::f64::consts::FRAC_PI_4;
+    assert_eq!((slope.slope_at(0.0), slope.slope_at(3.0), down.slope_at(3.0)), (0.0, quarter, -quarter));
+    assert!([0.9, 1.2, 9.0].iter().all(|&x| stairs.slope_at(x) == 0.0));
+    assert_eq!(g(Relief::Flat).slope_at(5.0), 0.0);
     // A relief the world cannot build is refused.
     let steep = WorldSettings {
         ground: Some(g(Relief::Slope { from_x: 0.0, degrees: 75.0 })),
         ..WorldSettings::thesis()
     };
     assert!(World::new(steep).is_err());
+}
+
+#[test]
+fn the_sensors_read_the_inclination_of_the_ground_under_the_centre_of_mass() {
+    use anima_body::Relief;
+    let mode = PdMode::ImplicitSpring;
+    let sk = humanoid(mode, STANCE_GAIN);
+    for (relief, expected) in [
+        (Relief::Slope { from_x: -3.0, degrees: 10.0 }, 10f64.to_radians()),
+        (Relief::Slope { from_x: -3.0, degrees: -5.0 }, -(5f64.to_radians())),
+        (Relief::Slope { from_x: 3.0, degrees: 10.0 }, 0.0),
+        (Relief::Stairs { from_x: -1.0, rise: 0.05, run: 2.0, count: 3 }, 0.0),
+    ] {
+        let mut settings = stance_settings(mode);
+        settings.ground = Some(anima_body::Ground { relief, ..settings.ground.unwrap() });
+        let mut world = World::new(settings).unwrap();
+        let m = world.add_model(&sk, Placement::OnGround { dx: 0.0 }).unwrap();
+        let mut s = Sensors::new(&world, m).unwrap();
+        world.sense(&mut s).unwrap();
+        assert_eq!(s.ground_slope, expected, "{relief:?}");
+    }
 }

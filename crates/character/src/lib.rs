@@ -125,6 +125,9 @@ enum Binding {
     TrunkRate {
         model: usize,
     },
+    GroundSlope {
+        model: usize,
+    },
     ComAheadOfAnkle {
         model: usize,
         side: usize,
@@ -195,6 +198,7 @@ impl SensorInput for BodyEnv {
             Binding::ComOffset { model, side } => catalogue::com_offset(&s[model], side),
             Binding::ComSpeed { model } => catalogue::com_speed(&s[model]),
             Binding::TrunkRate { model } => catalogue::trunk_rate(&s[model]),
+            Binding::GroundSlope { model } => catalogue::ground_slope(&s[model]),
             Binding::ComAheadOfAnkle { model, side } => catalogue::com_ahead_of_ankle(&s[model], side),
             Binding::FootDown { model, side } => catalogue::foot_down(&s[model], side),
             Binding::Never => 0.0,
@@ -318,6 +322,7 @@ impl Character {
                 "com_offset" => Binding::ComOffset { model, side: side()? },
                 "com_speed" => Binding::ComSpeed { model },
                 "trunk_rate" => Binding::TrunkRate { model },
+                "ground_slope" => Binding::GroundSlope { model },
                 "com_ahead_of_ankle" => Binding::ComAheadOfAnkle { model, side: side()? },
                 "foot_down" => Binding::FootDown { model, side: side()? },
                 "never" => Binding::Never,

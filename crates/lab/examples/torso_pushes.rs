@@ -41,7 +41,7 @@ fn on_terrain(c: &Controller, build: BuildOn, relief: Relief) -> (bool, String) 
 }
 
 fn main() {
-    let walkers: [(&str, &str, BuildOn, f64); 5] = [
+    let walkers: [(&str, &str, BuildOn, f64); 6] = [
         (
             "thesis's search (`walk-optimised.ron`)",
             "walk-optimised",
@@ -63,6 +63,12 @@ fn main() {
         (
             "thesis's machines searched for the protocol (`walk-protocol.ron`)",
             "walk-protocol",
+            protocol::humanoid,
+            BuiltinSkeleton::Humanoid.load().total_mass(),
+        ),
+        (
+            "the same, leaning into slopes (`walk-slopes.ron`)",
+            "walk-slopes",
             protocol::humanoid,
             BuiltinSkeleton::Humanoid.load().total_mass(),
         ),
@@ -152,7 +158,8 @@ fn main() {
         )
     };
     doc += "The walker searched for the whole protocol (`walk-protocol.ron`, CMA-ES with a speed-tracking \
-            score) and the issue's criteria checked against it are in `nunes-protocol.md`.\n";
+            score) and the issue's criteria checked against it are in `nunes-protocol.md`; its slope form \
+            (`walk-slopes.ron`) in `nunes-slopes.md`.\n";
     let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/reproduction/nunes-robustness.md");
     let tmp = out.with_extension("md.tmp");
     std::fs::write(&tmp, &doc).expect("write");

@@ -474,6 +474,105 @@ pub mod simbicon {
     }
 }
 
+/// A walker that leans into slopes: each leg-pose entry of W-LEGS that [`walk_poses::set`] writes
+/// becomes θ₀ + k·s, s the inclination of the ground under the centre of mass (rad, positive
+/// uphill; the `ground_slope` sensor). On level ground, the flat and the treads of stairs alike,
+/// s = 0 and the walker is the one it was made from to the bit; only its gait on slopes changes. The
+/// twelve gains follow the twelve pose numbers (mirrored into E4 and E6 as the poses are).
+pub mod slope_form {
+    use anima_control::optimise::{Dim, Space};
+    use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
+
+    use super::walk_poses;
+    use anima_character::{CharacterError, procedures};
+
+    /// The interval of every gain, rad of target per rad of slope: ±3 moves a target by up to
+    /// 0.52 rad on a 10° slope.
+    pub const GAIN_LIMIT: f64 = 3.0;
+
+    /// The joints whose targets get the slope term, in every walking state.
+    const JOINTS: [&str; 8] =
+        ["waist", "hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r", "inter_thigh"];
+
+    /// Turns a thesis-form walker (`walk.ron` or one searched from it) into its slope form, gains 0.
+    ///
+    /// # Panics
+    /// If the controller has no W-LEGS machine.
+    pub fn controller(walker: &Controller) -> Result<Controller, CharacterError> {
+        let mut desc = walker.to_desc();
+        let legs =
+            desc.machines.iter_mut().find(|m| m.name == "W-LEGS").expect("a walker has a W-LEGS machine");
+        for state in &mut legs.states {
+            if !["E1", "E3", "E4", "E6"].contains(&state.name.as_str()) {
+                continue;
+            }
+            for entry in &mut state.pose {
+                let name = match &entry.0 {
+                    ActuatorRef::Name(n) => n.clone(),
+                    ActuatorRef::Index(i) => walker.actuators()[*i].clone(),
+                };
+                let TargetDesc::Angle(p) = entry.1 else { continue };
+                if JOINTS.contains(&name.as_str()) {
+                    entry.1 = TargetDesc::Feedback(FeedbackDesc {
+                        base: p,
+                        world: false,
+                        terms: vec![FeedbackTerm {
+                            gain: Param::fixed(0.0),
+                            sensor: SensorDesc { kind: "ground_slope".into(), args: vec![], params: vec![] },
+                        }],
+                    });
+                }
+            }
+        }
+        Ok(Controller::from_desc(desc, &procedures())?)
+    }
+
+    /// The search space of the twelve gains, named after the pose numbers.
+    pub fn space() -> Space {
+        Space {
+            dims: walk_poses::NAMES
+                .iter()
+                .map(|n| Dim::new(&format!("k_{n}"), -GAIN_LIMIT, GAIN_LIMIT))
+                .collect(),
+        }
+    }
+
+    /// Writes the twelve gains `k` into a controller made by [`controller`], as [`walk_poses::set`]
+    /// writes the poses (the E3/E6 stance knee, fixed there, keeps gain 0; the inter-thigh target
+    /// gets the difference of the hips' gains with the swing side's sign).
+    ///
+    /// # Panics
+    /// If the controller was not made by [`controller`].
+    pub fn set(c: &mut Controller, k: &[f64]) {
+        let mut set = |label: String, v: f64| {
+            let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
+            c.set_param(id, v);
+        };
+        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
+            set(format!("W-LEGS/{state}/waist/k0"), k[0]);
+            set(format!("W-LEGS/{state}/hip_{sw}/k0"), k[1]);
+            set(format!("W-LEGS/{state}/knee_{sw}/k0"), k[2]);
+            set(format!("W-LEGS/{state}/ankle_{sw}/k0"), k[3]);
+            set(format!("W-LEGS/{state}/hip_{st}/k0"), k[4]);
+            set(format!("W-LEGS/{state}/knee_{st}/k0"), k[5]);
+            set(format!("W-LEGS/{state}/ankle_{st}/k0"), k[6]);
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            set(format!("W-LEGS/{state}/inter_thigh/k0"), s * (k[1] - k[4]));
+        }
+        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
+            set(format!("W-LEGS/{state}/waist/k0"), k[0]);
+            set(format!("W-LEGS/{state}/hip_{sw}/k0"), k[7]);
+            set(format!("W-LEGS/{state}/knee_{sw}/k0"), k[8]);
+            set(format!("W-LEGS/{state}/ankle_{sw}/k0"), k[9]);
+            set(format!("W-LEGS/{state}/hip_{st}/k0"), k[10]);
+            set(format!("W-LEGS/{state}/knee_{st}/k0"), 0.0);
+            set(format!("W-LEGS/{state}/ankle_{st}/k0"), k[11]);
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            set(format!("W-LEGS/{state}/inter_thigh/k0"), s * (k[7] - k[10]));
+        }
+    }
+}
+
 /// The thrower (both hands welded to the ball) standing on the ground, driven by `controller`.
 pub fn thrower_character(controller: Controller) -> Result<Character, CharacterError> {
     let mut world = World::new(world_settings(SUBSTEPS))?;
