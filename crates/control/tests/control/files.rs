@@ -37,6 +37,7 @@ const CATALOGUE: &[&str] = &[
     "com_ahead_of_ankle",
     "foot_down",
     "trunk_rate",
+    "ground_slope",
 ];
 
 #[test]
