@@ -547,6 +547,22 @@ fn the_simbicon_scene_is_the_faithful_walker() {
     assert!(!w.fell && w.distance > 30.0, "{w:?}");
 }
 
+/// Issue #18's first two criteria for walker `c`: 1.0 ± 0.1 m/s over a minute on the flat, and still up
+/// after SIMBICON's 70 N·s torso push forward and backward. Returns a minute's control steps.
+fn keeps_its_speed_and_survives_simbicons_push(c: &anima_control::Controller) -> u64 {
+    use anima_body::Relief;
+    use nunes::protocol::{self, humanoid};
+    let minute = (60.0 / nunes::DT).round() as u64;
+    let (fraction, distance) = protocol::walk_on(c, humanoid, Relief::Flat, minute, &[]);
+    assert!(
+        fraction >= 1.0 && (distance / 60.0 - 1.0).abs() <= 0.1,
+        "flat: {fraction}, {distance} m in 60 s"
+    );
+    assert!(protocol::survives_torso_push(c, humanoid, 70.0), "70 N·s forward");
+    assert!(protocol::survives_torso_push(c, humanoid, -70.0), "70 N·s backward");
+    minute
+}
+
 /// Issue #18's protocol: the walker CMA-ES found for it (`walk-protocol.ron`, `reproduce
 /// nunes-protocol`) keeps 1.0 ± 0.1 m/s on the flat, survives SIMBICON's torso push of 70 N·s forward
 /// and backward, and walks a minute (at least 30 m) up and down a 5° slope, down a 10° one and up and
@@ -557,14 +573,7 @@ fn the_protocol_walker_keeps_its_speed_survives_simbicons_push_and_walks_slopes_
     use anima_body::Relief;
     use nunes::protocol::{self, humanoid};
     let c = nunes::controller("walk-protocol").unwrap();
-    let minute = (60.0 / nunes::DT).round() as u64;
-    let (fraction, distance) = protocol::walk_on(&c, humanoid, Relief::Flat, minute, &[]);
-    assert!(
-        fraction >= 1.0 && (distance / 60.0 - 1.0).abs() <= 0.1,
-        "flat: {fraction}, {distance} m in 60 s"
-    );
-    assert!(protocol::survives_torso_push(&c, humanoid, 70.0), "70 N·s forward");
-    assert!(protocol::survives_torso_push(&c, humanoid, -70.0), "70 N·s backward");
+    let minute = keeps_its_speed_and_survives_simbicons_push(&c);
     let slope = |degrees| Relief::Slope { from_x: 2.0, degrees };
     let stairs = |rise| Relief::Stairs { from_x: 2.0, rise, run: 2.0, count: 1000 };
     for relief in [slope(5.0), slope(-5.0), slope(-10.0), stairs(0.05), stairs(-0.05)] {
@@ -578,17 +587,9 @@ fn the_protocol_walker_keeps_its_speed_survives_simbicons_push_and_walks_slopes_
 /// walks a minute (at least 30 m) up and down 5° and 10° slopes and 5 cm steps.
 #[test]
 fn the_slope_walker_meets_every_criterion_of_the_protocol() {
-    use anima_body::Relief;
     use nunes::protocol::{self, humanoid};
     let c = nunes::controller("walk-slopes").unwrap();
-    let minute = (60.0 / nunes::DT).round() as u64;
-    let (fraction, distance) = protocol::walk_on(&c, humanoid, Relief::Flat, minute, &[]);
-    assert!(
-        fraction >= 1.0 && (distance / 60.0 - 1.0).abs() <= 0.1,
-        "flat: {fraction}, {distance} m in 60 s"
-    );
-    assert!(protocol::survives_torso_push(&c, humanoid, 70.0), "70 N·s forward");
-    assert!(protocol::survives_torso_push(&c, humanoid, -70.0), "70 N·s backward");
+    let minute = keeps_its_speed_and_survives_simbicons_push(&c);
     for (label, relief) in protocol::terrains() {
         let (fraction, distance) = protocol::walk_on(&c, humanoid, relief, minute, &[]);
         assert!(fraction >= 1.0 && distance >= 30.0, "{label}: {fraction} of the minute, {distance} m");
@@ -615,4 +616,25 @@ fn the_slope_walker_is_the_protocol_walker_on_level_ground() {
         protocol::walk_on(&start, humanoid, up, 400, &[]),
     );
     assert_ne!(a, b);
+}
+
+/// The slope form's gains mirror between the legs as the poses do: writing a vector as gains
+/// (`slope_form::set`) puts on every entry's slope term what writing it as poses (`walk_poses::set`)
+/// puts on its θ₀, except the E3/E6 stance knee, whose pose is fixed and whose gain stays 0.
+#[test]
+fn the_slope_gains_follow_the_pose_numbers() {
+    use nunes::walk_poses::{self, Source};
+    let mut c = nunes::slope_form::controller(&nunes::controller("walk-protocol").unwrap()).unwrap();
+    let x: Vec<f64> = (0..12).map(|i| 0.1 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+    nunes::slope_form::set(&mut c, &x);
+    walk_poses::set(&mut c, &x);
+    let get = |label: &str| c.param(c.param_id(label).unwrap_or_else(|| panic!("no parameter {label}")));
+    for (label, source) in walk_poses::layout() {
+        let gain = get(&format!("{label}/k0"));
+        match source {
+            Source::Fixed(_) => assert_eq!(gain, 0.0, "{label}"),
+            _ => assert_eq!(gain, get(&label), "{label}"),
+        }
+    }
+    assert_eq!(walk_poses::layout().len(), 32);
 }

@@ -343,36 +343,63 @@ pub mod walk_poses {
         ]
     }
 
-    /// Writes pose vector `x` into a walking controller (E1/E3 and mirrored E4/E6).
+    /// Where each W-LEGS pose entry of the walking states takes its value from.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub enum Source {
+        /// Pose number i.
+        Number(usize),
+        /// A fixed angle, rad (E3/E6's stance knee).
+        Fixed(f64),
+        /// sign × (number a − number b): the inter-thigh target, hip_l − hip_r.
+        Difference(f64, usize, usize),
+    }
+
+    /// The pose entries the twelve numbers set, as (`W-LEGS/<state>/<joint>`, source): E1 and E3 with
+    /// the left leg swinging, and their mirrors E4 and E6.
+    pub fn layout() -> Vec<(String, Source)> {
+        let mut out = Vec::new();
+        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            out.extend([
+                (format!("W-LEGS/{state}/waist"), Source::Number(0)),
+                (format!("W-LEGS/{state}/hip_{sw}"), Source::Number(1)),
+                (format!("W-LEGS/{state}/knee_{sw}"), Source::Number(2)),
+                (format!("W-LEGS/{state}/ankle_{sw}"), Source::Number(3)),
+                (format!("W-LEGS/{state}/hip_{st}"), Source::Number(4)),
+                (format!("W-LEGS/{state}/knee_{st}"), Source::Number(5)),
+                (format!("W-LEGS/{state}/ankle_{st}"), Source::Number(6)),
+                (format!("W-LEGS/{state}/inter_thigh"), Source::Difference(s, 1, 4)),
+            ]);
+        }
+        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
+            let s = if sw == "l" { 1.0 } else { -1.0 };
+            out.extend([
+                (format!("W-LEGS/{state}/waist"), Source::Number(0)),
+                (format!("W-LEGS/{state}/hip_{sw}"), Source::Number(7)),
+                (format!("W-LEGS/{state}/knee_{sw}"), Source::Number(8)),
+                (format!("W-LEGS/{state}/ankle_{sw}"), Source::Number(9)),
+                (format!("W-LEGS/{state}/hip_{st}"), Source::Number(10)),
+                (format!("W-LEGS/{state}/knee_{st}"), Source::Fixed(-0.05)),
+                (format!("W-LEGS/{state}/ankle_{st}"), Source::Number(11)),
+                (format!("W-LEGS/{state}/inter_thigh"), Source::Difference(s, 7, 10)),
+            ]);
+        }
+        out
+    }
+
+    /// Writes pose vector `x` into a walking controller (E1/E3 and mirrored E4/E6; see [`layout`]).
     ///
     /// # Panics
     /// If the controller is not the walker (a W-LEGS pose entry is missing).
     pub fn set(c: &mut Controller, x: &[f64]) {
-        let mut set = |label: String, v: f64| {
+        for (label, source) in layout() {
+            let v = match source {
+                Source::Number(i) => x[i],
+                Source::Fixed(v) => v,
+                Source::Difference(s, a, b) => s * (x[a] - x[b]),
+            };
             let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
             c.set_param(id, v);
-        };
-        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
-            set(format!("W-LEGS/{state}/waist"), x[0]);
-            set(format!("W-LEGS/{state}/hip_{sw}"), x[1]);
-            set(format!("W-LEGS/{state}/knee_{sw}"), x[2]);
-            set(format!("W-LEGS/{state}/ankle_{sw}"), x[3]);
-            set(format!("W-LEGS/{state}/hip_{st}"), x[4]);
-            set(format!("W-LEGS/{state}/knee_{st}"), x[5]);
-            set(format!("W-LEGS/{state}/ankle_{st}"), x[6]);
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            set(format!("W-LEGS/{state}/inter_thigh"), s * (x[1] - x[4]));
-        }
-        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
-            set(format!("W-LEGS/{state}/waist"), x[0]);
-            set(format!("W-LEGS/{state}/hip_{sw}"), x[7]);
-            set(format!("W-LEGS/{state}/knee_{sw}"), x[8]);
-            set(format!("W-LEGS/{state}/ankle_{sw}"), x[9]);
-            set(format!("W-LEGS/{state}/hip_{st}"), x[10]);
-            set(format!("W-LEGS/{state}/knee_{st}"), -0.05);
-            set(format!("W-LEGS/{state}/ankle_{st}"), x[11]);
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            set(format!("W-LEGS/{state}/inter_thigh"), s * (x[7] - x[10]));
         }
     }
 }
@@ -537,38 +564,22 @@ pub mod slope_form {
         }
     }
 
-    /// Writes the twelve gains `k` into a controller made by [`controller`], as [`walk_poses::set`]
-    /// writes the poses (the E3/E6 stance knee, fixed there, keeps gain 0; the inter-thigh target
-    /// gets the difference of the hips' gains with the swing side's sign).
+    /// Writes the twelve gains `k` into a controller made by [`controller`], entry by entry as
+    /// [`walk_poses::set`] writes the poses (the E3/E6 stance knee, fixed there, keeps gain 0; the
+    /// inter-thigh target gets the difference of the hips' gains with the swing side's sign).
     ///
     /// # Panics
     /// If the controller was not made by [`controller`].
     pub fn set(c: &mut Controller, k: &[f64]) {
-        let mut set = |label: String, v: f64| {
+        for (label, source) in walk_poses::layout() {
+            let v = match source {
+                walk_poses::Source::Number(i) => k[i],
+                walk_poses::Source::Fixed(_) => 0.0,
+                walk_poses::Source::Difference(s, a, b) => s * (k[a] - k[b]),
+            };
+            let label = format!("{label}/k0");
             let id = c.param_id(&label).unwrap_or_else(|| panic!("no parameter {label}"));
             c.set_param(id, v);
-        };
-        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
-            set(format!("W-LEGS/{state}/waist/k0"), k[0]);
-            set(format!("W-LEGS/{state}/hip_{sw}/k0"), k[1]);
-            set(format!("W-LEGS/{state}/knee_{sw}/k0"), k[2]);
-            set(format!("W-LEGS/{state}/ankle_{sw}/k0"), k[3]);
-            set(format!("W-LEGS/{state}/hip_{st}/k0"), k[4]);
-            set(format!("W-LEGS/{state}/knee_{st}/k0"), k[5]);
-            set(format!("W-LEGS/{state}/ankle_{st}/k0"), k[6]);
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            set(format!("W-LEGS/{state}/inter_thigh/k0"), s * (k[1] - k[4]));
-        }
-        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
-            set(format!("W-LEGS/{state}/waist/k0"), k[0]);
-            set(format!("W-LEGS/{state}/hip_{sw}/k0"), k[7]);
-            set(format!("W-LEGS/{state}/knee_{sw}/k0"), k[8]);
-            set(format!("W-LEGS/{state}/ankle_{sw}/k0"), k[9]);
-            set(format!("W-LEGS/{state}/hip_{st}/k0"), k[10]);
-            set(format!("W-LEGS/{state}/knee_{st}/k0"), 0.0);
-            set(format!("W-LEGS/{state}/ankle_{st}/k0"), k[11]);
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            set(format!("W-LEGS/{state}/inter_thigh/k0"), s * (k[7] - k[10]));
         }
     }
 }

@@ -175,6 +175,25 @@ fn cells(m: &Measures) -> String {
     row
 }
 
+/// The header of a table of walkers: the columns `first`, then the score, [`cells`]'s and the criteria
+/// met.
+fn table_header(first: &[&str]) -> String {
+    let mut head = String::from("|");
+    for c in first {
+        let _ = write!(head, " {c} |");
+    }
+    head.push_str(" score | speed (m/s) | speed error (m/s) | torso push forward / backward (N·s) |");
+    for (label, _) in terrains() {
+        let _ = write!(head, " {label} |");
+    }
+    head.push_str(" criteria met |\n|");
+    for _ in 0..first.len() + 4 + terrains().len() + 1 {
+        head.push_str("---|");
+    }
+    head.push('\n');
+    head
+}
+
 /// Whether a minute on a terrain, (fraction walked, distance), counts as walking it: still up at the
 /// end and at least half of what the target speed would cover.
 fn walked(&(fraction, distance): &(f64, f64)) -> bool {
@@ -351,18 +370,7 @@ pub fn reproduce(repo: &Repo, seeds: usize) -> Result<()> {
          and each terrain walked (still up after 60 s, at least 30 m covered, half of what 1.0 m/s would).\n",
         first + seeds - 1
     );
-    let _ = write!(
-        doc,
-        "| form | seed | score | speed (m/s) | speed error (m/s) | torso push forward / backward (N·s) |"
-    );
-    for (label, _) in terrains() {
-        let _ = write!(doc, " {label} |");
-    }
-    doc.push_str(" criteria met |\n|---|---|---|---|---|---|");
-    for _ in terrains() {
-        doc.push_str("---|");
-    }
-    doc.push_str("---|\n");
+    doc.push_str(&table_header(&["form", "seed"]));
     for f in &found {
         let _ = writeln!(
             doc,
@@ -461,18 +469,7 @@ pub fn reproduce_slopes(repo: &Repo, seeds: usize) -> Result<()> {
         first + seeds - 1,
         l = nunes::slope_form::GAIN_LIMIT,
     );
-    let _ = write!(
-        doc,
-        "| walker | score | speed (m/s) | speed error (m/s) | torso push forward / backward (N·s) |"
-    );
-    for (label, _) in terrains() {
-        let _ = write!(doc, " {label} |");
-    }
-    doc.push_str(" criteria met |\n|---|---|---|---|---|");
-    for _ in terrains() {
-        doc.push_str("---|");
-    }
-    doc.push_str("---|\n");
+    doc.push_str(&table_header(&["walker"]));
     let _ = writeln!(
         doc,
         "| walk-protocol.ron (gains 0) | {start_score:.3} |{} {} / 8 |",
