@@ -596,6 +596,22 @@ fn the_slope_walker_meets_every_criterion_of_the_protocol() {
     }
 }
 
+/// The slope walker's gains serve the slopes between the protocol's too (gains searched on the
+/// protocol's slopes alone fell within seconds at −7.5°): a minute on each of −7.5°, −2.5°, 2.5° and
+/// 7.5° without falling.
+#[test]
+fn the_slope_walker_stays_up_on_the_slopes_between() {
+    use anima_body::Relief;
+    use nunes::protocol::{self, humanoid};
+    let c = nunes::controller("walk-slopes").unwrap();
+    let minute = (60.0 / nunes::DT).round() as u64;
+    for degrees in protocol::BETWEEN_SLOPES {
+        let (fraction, distance) =
+            protocol::walk_on(&c, humanoid, Relief::Slope { from_x: 2.0, degrees }, minute, &[]);
+        assert!(fraction >= 1.0, "{degrees}°: fell after {fraction} of the minute ({distance} m)");
+    }
+}
+
 /// The slope form changes nothing on level ground: `walk-slopes.ron` walks the flat and the stairs
 /// exactly as `walk-protocol.ron` does (the ground_slope sensor reads 0 there), and differs up a slope.
 #[test]
