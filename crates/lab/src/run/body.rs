@@ -286,11 +286,16 @@ fn run_figures<F: Figures>(
         });
     }
     let frame_every = ((frame_interval / settings.dt).round() as u64).max(1);
-    let view = view_for(world)?;
+    let mut view = view_for(world)?;
+    // How high above the picture's bottom the ground under the figures starts, m: the view keeps it.
+    let ground_above_bottom = figures_middle(world, &mut Vec::new())?
+        .zip(world.settings().ground)
+        .map_or(0.0, |(x, g)| g.height_at(x) - view.y_min);
     let mut frames: Vec<Image> = Vec::new();
     let mut poses = Vec::new();
     let out = opts.picture_dir();
     let mut picture = |world: &World, k: usize, frames: &mut Vec<Image>| -> Result<()> {
+        view = follow(view, ground_above_bottom, world, &mut poses)?;
         let img = draw(world, &view, &mut poses)?;
         if let Some(dir) = out {
             write_png(&dir.join(format!("frame_{k:04}.png")), &img)?;
@@ -439,6 +444,46 @@ fn view_for(world: &World) -> Result<View2d> {
     Ok(View2d::fit(x0 - 1.0, ground - 0.3, x1 + 1.0, y1 + 0.4, WIDTH, HEIGHT, 8))
 }
 
+/// The middle of the span of every model's body centres across, m (`None` without bodies).
+fn figures_middle(world: &World, poses: &mut Vec<BodyPose>) -> Result<Option<f64>> {
+    let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for m in 0..world.n_models() {
+        world.body_poses(m, poses)?;
+        for p in poses.iter() {
+            x0 = x0.min(p.centre[0]);
+            x1 = x1.max(p.centre[0]);
+        }
+    }
+    Ok((x0.is_finite() && x1.is_finite()).then_some(0.5 * (x0 + x1)))
+}
+
+/// The view moved to keep the figures in sight: when the middle of their bodies' centres has left the
+/// middle third of the picture across, the view is centred on it again; when the ground under it has
+/// moved more than a sixth of the picture's height from `ground_above_bottom` (its height above the
+/// picture's bottom in the first view), the view is raised or lowered to put it back there. The scale
+/// stays. A figure that stays near where it started keeps its first view; a walker is followed along
+/// its walk and up or down a slope.
+fn follow(
+    view: View2d,
+    ground_above_bottom: f64,
+    world: &World,
+    poses: &mut Vec<BodyPose>,
+) -> Result<View2d> {
+    let Some(x) = figures_middle(world, poses)? else { return Ok(view) };
+    let (w, h) = (f64::from(WIDTH) / view.scale, f64::from(view.height) / view.scale);
+    let mut next = view;
+    if (x - (view.x_min + w / 2.0)).abs() > w / 6.0 {
+        next.x_min = x - w / 2.0;
+    }
+    if let Some(g) = world.settings().ground {
+        let at = g.height_at(x);
+        if (at - next.y_min - ground_above_bottom).abs() > h / 6.0 {
+            next.y_min = at - ground_above_bottom;
+        }
+    }
+    Ok(next)
+}
+
 /// Box figures of every model: centre bodies grey-blue, left limbs green, right limbs red; the left
 /// side is drawn last so that it lies in front, as the thesis's figures show it.
 fn draw(world: &World, view: &View2d, poses: &mut Vec<BodyPose>) -> Result<Image> {
@@ -540,6 +585,38 @@ mod tests {
             assert_eq!(&bytes[1..4], b"PNG");
         }
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The humanoid standing `dx` along ground that rises at 10° from 2 m on.
+    fn humanoid_on_a_slope(dx: f64) -> World {
+        let mut settings = anima_body::WorldSettings::thesis();
+        settings.ground = settings
+            .ground
+            .map(|g| Ground { relief: anima_body::Relief::Slope { from_x: 2.0, degrees: 10.0 }, ..g });
+        let mut world = World::new(settings).unwrap();
+        let sk = anima_body::BuiltinSkeleton::Humanoid.load();
+        world.add_model(&sk, anima_body::Placement::OnGround { dx }).unwrap();
+        world
+    }
+
+    #[test]
+    fn the_view_follows_the_figures_along_and_up_the_ground() {
+        let start = humanoid_on_a_slope(0.0);
+        let first = view_for(&start).unwrap();
+        let ground = |w: &World, x: f64| w.settings().ground.unwrap().height_at(x);
+        let reference = ground(&start, 0.0) - first.y_min;
+        let mut poses = Vec::new();
+        // Where it started, the first view stays as it is.
+        assert_eq!(follow(first, reference, &start, &mut poses).unwrap(), first);
+        // 20 m up the slope, the view is centred on the figure and the ground under it is back where it
+        // was in the first picture; the scale is the same.
+        let later = humanoid_on_a_slope(20.0);
+        let v = follow(first, reference, &later, &mut poses).unwrap();
+        let x = figures_middle(&later, &mut poses).unwrap().unwrap();
+        let width = f64::from(WIDTH) / v.scale;
+        assert!((v.x_min + width / 2.0 - x).abs() < 1e-9, "{v:?}");
+        assert!((ground(&later, x) - v.y_min - reference).abs() < 1e-9, "{v:?}");
+        assert_eq!((v.scale, v.height), (first.scale, first.height));
     }
 
     #[test]
