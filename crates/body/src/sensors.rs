@@ -81,7 +81,7 @@ pub struct Sensors {
     /// to the centre of mass, m, signed along the facing direction; `None` in flight.
     pub com_over_support: Option<f64>,
     /// Inclination of the ground under the centre of mass, rad, positive rising in the facing
-    /// direction (0 without a ground): what a walker sees of the terrain ahead of its feet.
+    /// direction (0 without a ground): what a walker sees of the terrain it is on.
     pub ground_slope: f64,
     pub layout: BodyLayout,
     /// +1 facing +x, −1 facing −x.
