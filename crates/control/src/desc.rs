@@ -245,6 +245,17 @@ pub enum ActuatorRef {
     Index(usize),
 }
 
+impl ActuatorRef {
+    /// The actuator's name, looked up in the controller's `actuators` list for an index (`None` for an
+    /// index out of range).
+    pub fn name<'a>(&'a self, actuators: &'a [String]) -> Option<&'a str> {
+        match self {
+            Self::Name(n) => Some(n),
+            Self::Index(i) => actuators.get(*i).map(String::as_str),
+        }
+    }
+}
+
 impl fmt::Display for ActuatorRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

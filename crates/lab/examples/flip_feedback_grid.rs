@@ -8,7 +8,7 @@
 //!
 //! `FLIP_RON=assets/controllers/backflip.ron cargo run --release -p anima-lab --example
 //! flip_feedback_grid -- -1 -0.6 0`
-use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
+use anima_control::{Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
 use anima_lab::nunes;
 
 fn with_gains(c: &Controller, joints: &[&str], kd: f64, kv: f64) -> Controller {
@@ -19,10 +19,7 @@ fn with_gains(c: &Controller, joints: &[&str], kd: f64, kv: f64) -> Controller {
     let m = desc.machines.iter_mut().find(|m| m.name == machine).expect("machine");
     let e4 = m.states.iter_mut().find(|s| s.name == state).expect("state");
     for entry in &mut e4.pose {
-        let name = match &entry.0 {
-            ActuatorRef::Name(n) => n.clone(),
-            ActuatorRef::Index(i) => c.actuators()[*i].clone(),
-        };
+        let Some(name) = entry.0.name(c.actuators()) else { continue };
         // A joint that already has feedback keeps its θ₀ and gets the new gains.
         let p = match &entry.1 {
             TargetDesc::Angle(p) => *p,

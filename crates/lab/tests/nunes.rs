@@ -548,19 +548,17 @@ fn the_simbicon_scene_is_the_faithful_walker() {
 }
 
 /// Issue #18's first two criteria for walker `c`: 1.0 ± 0.1 m/s over a minute on the flat, and still up
-/// after SIMBICON's 70 N·s torso push forward and backward. Returns a minute's control steps.
-fn keeps_its_speed_and_survives_simbicons_push(c: &anima_control::Controller) -> u64 {
+/// after SIMBICON's 70 N·s torso push forward and backward.
+fn keeps_its_speed_and_survives_simbicons_push(c: &anima_control::Controller) {
     use anima_body::Relief;
     use nunes::protocol::{self, humanoid};
-    let minute = (60.0 / nunes::DT).round() as u64;
-    let (fraction, distance) = protocol::walk_on(c, humanoid, Relief::Flat, minute, &[]);
+    let (fraction, distance) = protocol::walk_on(c, humanoid, Relief::Flat, protocol::MINUTE, &[]);
     assert!(
         fraction >= 1.0 && (distance / 60.0 - 1.0).abs() <= 0.1,
         "flat: {fraction}, {distance} m in 60 s"
     );
     assert!(protocol::survives_torso_push(c, humanoid, 70.0), "70 N·s forward");
     assert!(protocol::survives_torso_push(c, humanoid, -70.0), "70 N·s backward");
-    minute
 }
 
 /// Issue #18's protocol: the walker CMA-ES found for it (`walk-protocol.ron`, `reproduce
@@ -573,8 +571,9 @@ fn the_protocol_walker_keeps_its_speed_survives_simbicons_push_and_walks_slopes_
     use anima_body::Relief;
     use nunes::protocol::{self, humanoid};
     let c = nunes::controller("walk-protocol").unwrap();
-    let minute = keeps_its_speed_and_survives_simbicons_push(&c);
-    let slope = |degrees| Relief::Slope { from_x: 2.0, degrees };
+    keeps_its_speed_and_survives_simbicons_push(&c);
+    let minute = protocol::MINUTE;
+    let slope = protocol::slope;
     let stairs = |rise| Relief::Stairs { from_x: 2.0, rise, run: 2.0, count: 1000 };
     for relief in [slope(5.0), slope(-5.0), slope(-10.0), stairs(0.05), stairs(-0.05)] {
         let (fraction, distance) = protocol::walk_on(&c, humanoid, relief, minute, &[]);
@@ -589,7 +588,8 @@ fn the_protocol_walker_keeps_its_speed_survives_simbicons_push_and_walks_slopes_
 fn the_slope_walker_meets_every_criterion_of_the_protocol() {
     use nunes::protocol::{self, humanoid};
     let c = nunes::controller("walk-slopes").unwrap();
-    let minute = keeps_its_speed_and_survives_simbicons_push(&c);
+    keeps_its_speed_and_survives_simbicons_push(&c);
+    let minute = protocol::MINUTE;
     for (label, relief) in protocol::terrains() {
         let (fraction, distance) = protocol::walk_on(&c, humanoid, relief, minute, &[]);
         assert!(fraction >= 1.0 && distance >= 30.0, "{label}: {fraction} of the minute, {distance} m");
@@ -601,13 +601,11 @@ fn the_slope_walker_meets_every_criterion_of_the_protocol() {
 /// 7.5° without falling.
 #[test]
 fn the_slope_walker_stays_up_on_the_slopes_between() {
-    use anima_body::Relief;
     use nunes::protocol::{self, humanoid};
     let c = nunes::controller("walk-slopes").unwrap();
-    let minute = (60.0 / nunes::DT).round() as u64;
+    let minute = protocol::MINUTE;
     for degrees in protocol::BETWEEN_SLOPES {
-        let (fraction, distance) =
-            protocol::walk_on(&c, humanoid, Relief::Slope { from_x: 2.0, degrees }, minute, &[]);
+        let (fraction, distance) = protocol::walk_on(&c, humanoid, protocol::slope(degrees), minute, &[]);
         assert!(fraction >= 1.0, "{degrees}°: fell after {fraction} of the minute ({distance} m)");
     }
 }
@@ -626,7 +624,7 @@ fn the_slope_walker_is_the_protocol_walker_on_level_ground() {
         let b = protocol::walk_on(&start, humanoid, relief, 400, &[]);
         assert_eq!(a, b, "{relief:?}");
     }
-    let up = Relief::Slope { from_x: 2.0, degrees: 10.0 };
+    let up = protocol::slope(10.0);
     let (a, b) = (
         protocol::walk_on(&slopes, humanoid, up, 400, &[]),
         protocol::walk_on(&start, humanoid, up, 400, &[]),

@@ -411,7 +411,7 @@ pub mod walk_poses {
 /// transitions, the arms — is the thesis's walker, so the two can be compared on equal terms.
 pub mod simbicon {
     use anima_control::optimise::{Dim, Space};
-    use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
+    use anima_control::{Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
 
     use super::walk_poses;
     use anima_character::{CharacterError, procedures};
@@ -453,10 +453,7 @@ pub mod simbicon {
                 },
             ];
             for entry in &mut state.pose {
-                let name = match &entry.0 {
-                    ActuatorRef::Name(n) => n.clone(),
-                    ActuatorRef::Index(i) => walker.actuators()[*i].clone(),
-                };
+                let Some(name) = entry.0.name(walker.actuators()) else { continue };
                 let TargetDesc::Angle(p) = entry.1 else { continue };
                 entry.1 = if name == format!("hip_{sw}") {
                     TargetDesc::Feedback(FeedbackDesc { base: p, world: true, terms: terms.clone() })
@@ -508,7 +505,7 @@ pub mod simbicon {
 /// twelve gains follow the twelve pose numbers (mirrored into E4 and E6 as the poses are).
 pub mod slope_form {
     use anima_control::optimise::{Dim, Space};
-    use anima_control::{ActuatorRef, Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
+    use anima_control::{Controller, FeedbackDesc, FeedbackTerm, Param, SensorDesc, TargetDesc};
 
     use super::walk_poses;
     use anima_character::{CharacterError, procedures};
@@ -534,12 +531,9 @@ pub mod slope_form {
                 continue;
             }
             for entry in &mut state.pose {
-                let name = match &entry.0 {
-                    ActuatorRef::Name(n) => n.clone(),
-                    ActuatorRef::Index(i) => walker.actuators()[*i].clone(),
-                };
+                let Some(name) = entry.0.name(walker.actuators()) else { continue };
                 let TargetDesc::Angle(p) = entry.1 else { continue };
-                if JOINTS.contains(&name.as_str()) {
+                if JOINTS.contains(&name) {
                     entry.1 = TargetDesc::Feedback(FeedbackDesc {
                         base: p,
                         world: false,

@@ -37,7 +37,6 @@ pub fn flat() -> Ground {
 /// The terrains: flat for 2 m, then slopes of ±5° and ±10° for ever, or steps of 5 cm up or down every
 /// 2 m.
 pub fn terrains() -> [(&'static str, Relief); 6] {
-    let slope = |degrees| Relief::Slope { from_x: 2.0, degrees };
     let stairs = |rise| Relief::Stairs { from_x: 2.0, rise, run: 2.0, count: 1000 };
     [
         ("+5°", slope(5.0)),
@@ -48,6 +47,14 @@ pub fn terrains() -> [(&'static str, Relief); 6] {
         ("5 cm down", stairs(-0.05)),
     ]
 }
+
+/// Ground that is flat for 2 m, then rises at `degrees` (negative: falls) for ever.
+pub fn slope(degrees: f64) -> Relief {
+    Relief::Slope { from_x: 2.0, degrees }
+}
+
+/// Control steps of the measures' minute-long walks.
+pub const MINUTE: u64 = (60.0 / nunes::DT + 0.5) as u64;
 
 /// Control steps before a push (20 s, a steady gait) and after it before the walker counts as having
 /// survived (10 s).
@@ -148,7 +155,7 @@ pub struct Measures {
 
 /// Measures `c` on the whole protocol.
 pub fn measure(c: &Controller, build: Build) -> Measures {
-    let minute = (60.0 / nunes::DT).round() as u64;
+    let minute = MINUTE;
     let (_, d) = walk_on(c, build, Relief::Flat, minute, &[]);
     Measures {
         speed: d / 60.0,
@@ -406,7 +413,6 @@ pub const BETWEEN_SLOPES: [f64; 4] = [-7.5, -2.5, 2.5, 7.5];
 /// The slope search's objective (at most 13): [`protocol_score`] plus the credit of a 30 s walk on each
 /// of [`BETWEEN_SLOPES`].
 pub fn slope_score(c: &Controller) -> f64 {
-    let slope = |degrees| Relief::Slope { from_x: 2.0, degrees };
     protocol_score(c, humanoid)
         + BETWEEN_SLOPES
             .iter()
@@ -421,8 +427,8 @@ const SWEEP: [f64; 11] = [-12.5, -10.0, -7.5, -5.0, -2.5, 0.0, 2.5, 5.0, 7.5, 10
 fn sweep_cells(c: &Controller) -> String {
     let mut row = String::new();
     for d in SWEEP {
-        let relief = if d == 0.0 { Relief::Flat } else { Relief::Slope { from_x: 2.0, degrees: d } };
-        let (fraction, distance) = walk_on(c, humanoid, relief, (60.0 / nunes::DT).round() as u64, &[]);
+        let relief = if d == 0.0 { Relief::Flat } else { slope(d) };
+        let (fraction, distance) = walk_on(c, humanoid, relief, MINUTE, &[]);
         if fraction >= 1.0 {
             let _ = write!(row, " {distance:.0} m |");
         } else {

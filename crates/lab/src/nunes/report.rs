@@ -686,7 +686,7 @@ pub const FLIP_ITERATIONS: u64 = 600;
 fn flip() -> Result<String> {
     let c = nunes::controller("backflip")?;
     let t = Instant::now();
-    let o = nunes::backflip(c, nunes::FLIP_SPACING, FLIP_ITERATIONS, |_| ())?;
+    let o = nunes::backflip(c.clone(), nunes::FLIP_SPACING, FLIP_ITERATIONS, |_| ())?;
     let per_iteration = t.elapsed().as_secs_f64() / o.iterations as f64;
     let it = |k: Option<u64>| k.map_or("never".to_string(), |k| k.to_string());
     let mut s = String::from("## Backflip assisted by a second humanoid (spec §8.4)\n\n");
@@ -769,7 +769,7 @@ fn flip() -> Result<String> {
     );
     let yes = |b: bool| if b { "yes" } else { "no" };
     for d in nunes::FLIP_SPACINGS {
-        let o = nunes::backflip(nunes::controller("backflip")?, d, FLIP_ITERATIONS, |_| ())?;
+        let o = nunes::backflip(c.clone(), d, FLIP_ITERATIONS, |_| ())?;
         let _ = writeln!(
             s,
             "| {d:.2} | {} | {:.2} / {:.2} | {} | {} | {} | {} |",
@@ -783,10 +783,12 @@ fn flip() -> Result<String> {
         );
     }
     // Between the spacings it was tuned at: whether the flip holds for a spacing it never saw.
-    let fine: Vec<f64> = (0..=16).map(|k| 0.86 + 0.005 * k as f64).collect();
+    let (near, far) = (nunes::FLIP_SPACINGS[0], nunes::FLIP_SPACINGS[nunes::FLIP_SPACINGS.len() - 1]);
+    let steps = ((far - near) / 0.005).round() as usize;
+    let fine: Vec<f64> = (0..=steps).map(|k| near + 0.005 * k as f64).collect();
     let mut complete = Vec::new();
     for &d in &fine {
-        let o = nunes::backflip(nunes::controller("backflip")?, d, FLIP_ITERATIONS, |_| ())?;
+        let o = nunes::backflip(c.clone(), d, FLIP_ITERATIONS, |_| ())?;
         if o.flipped() && !o.pusher_fell {
             complete.push(format!("{d:.3}"));
         }

@@ -428,32 +428,31 @@ pub const SKY: [u8; 3] = [250, 250, 246];
 const GROUND: [u8; 3] = [205, 195, 175];
 const OUTLINE: [u8; 3] = [40, 40, 40];
 
-/// A fixed view framing every model's initial configuration with room to move.
-fn view_for(world: &World) -> Result<View2d> {
-    let mut poses = Vec::new();
+/// The extent of every model's body centres: (leftmost x, rightmost x, highest y), m; infinite
+/// without bodies.
+fn figures_extent(world: &World, poses: &mut Vec<BodyPose>) -> Result<(f64, f64, f64)> {
     let (mut x0, mut x1, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY);
     for m in 0..world.n_models() {
-        world.body_poses(m, &mut poses)?;
-        for p in &poses {
+        world.body_poses(m, poses)?;
+        for p in poses.iter() {
             x0 = x0.min(p.centre[0]);
             x1 = x1.max(p.centre[0]);
             y1 = y1.max(p.centre[1]);
         }
     }
+    Ok((x0, x1, y1))
+}
+
+/// A view framing every model's initial configuration with room to move.
+fn view_for(world: &World) -> Result<View2d> {
+    let (x0, x1, y1) = figures_extent(world, &mut Vec::new())?;
     let ground = world.settings().ground.map_or(0.0, |g| g.height_at(x0).min(g.height_at(x1)));
     Ok(View2d::fit(x0 - 1.0, ground - 0.3, x1 + 1.0, y1 + 0.4, WIDTH, HEIGHT, 8))
 }
 
 /// The middle of the span of every model's body centres across, m (`None` without bodies).
 fn figures_middle(world: &World, poses: &mut Vec<BodyPose>) -> Result<Option<f64>> {
-    let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
-    for m in 0..world.n_models() {
-        world.body_poses(m, poses)?;
-        for p in poses.iter() {
-            x0 = x0.min(p.centre[0]);
-            x1 = x1.max(p.centre[0]);
-        }
-    }
+    let (x0, x1, _) = figures_extent(world, poses)?;
     Ok((x0.is_finite() && x1.is_finite()).then_some(0.5 * (x0 + x1)))
 }
 
