@@ -391,6 +391,29 @@ pub mod catalogue {
         on(l.min(r) - s.facing * s.body_position[p][0] > tol)
     }
 
+    /// Standard gravity, m/s², for the capture point's pendulum ([`capture_outside`]).
+    pub const CAPTURE_GRAVITY: f64 = 9.81;
+
+    /// The capture point along the facing direction, m: x + v/ω with ω = √(g/h), h the centre of
+    /// mass's height above the lower foot. It is where a linear inverted pendulum with the figure's
+    /// centre of mass would have to put its foot to come to rest (Pratt et al. 2006). `None` for a
+    /// model without both feet.
+    pub fn capture_point(s: &Sensors) -> Option<f64> {
+        let [Some(l), Some(r)] = s.layout.feet else { return None };
+        let height = s.com[1] - s.body_position[l][1].min(s.body_position[r][1]);
+        let omega = (CAPTURE_GRAVITY / height.max(0.1)).sqrt();
+        Some(s.facing * (s.com[0] + s.com_velocity[0] / omega))
+    }
+
+    /// anima's: 1 if the capture point ([`capture_point`]) lies more than `margin` m behind the
+    /// hindmost ankle or ahead of the foremost one: the figure cannot come to rest on the feet it
+    /// has and must step. Read in the facing direction.
+    pub fn capture_outside(s: &Sensors, margin: f64) -> f64 {
+        let ankles = [0, 1].map(|f| ankle_position(s, f).map(|a| s.facing * a[0]));
+        let ([Some(a), Some(b)], Some(c)) = (ankles, capture_point(s)) else { return 0.0 };
+        on(c < a.min(b) - margin || c > a.max(b) + margin)
+    }
+
     /// S-FOOTONHANDS: 1 if one foot of the acrobat touches both hands of the pusher (the model and
     /// hand bodies of the `pusher` reading).
     pub fn foot_on_hands(acrobat: &Sensors, pusher: &Sensors) -> f64 {

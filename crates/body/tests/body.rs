@@ -607,6 +607,21 @@ fn sensors_read_contacts_support_and_the_catalogue() {
         assert!((d - catalogue::com_offset(&s, side) - 0.06).abs() < 5e-3, "{d}");
         assert_eq!(catalogue::foot_down(&s, side), 1.0);
     }
+    // Standing still, the capture point is the centre of mass, between the ankles' margins; moving at
+    // 1 m/s it lies v/ω = 1/√(g/h) ahead or behind (h ≈ 1 m: about 0.3 m), beyond the feet.
+    let cp = catalogue::capture_point(&s).unwrap();
+    assert!((cp - s.com[0]).abs() < 0.01, "capture point {cp} m, centre of mass {} m", s.com[0]);
+    assert_eq!(catalogue::capture_outside(&s, 0.05), 0.0);
+    let height = s.com[1] - s.body_position[fl.unwrap()][1].min(s.body_position[fr.unwrap()][1]);
+    for v in [-1.0, 1.0] {
+        let mut moving = s.clone();
+        moving.com_velocity[0] = v;
+        let expected = s.com[0] + v * (height / catalogue::CAPTURE_GRAVITY).sqrt();
+        assert!((catalogue::capture_point(&moving).unwrap() - expected).abs() < 1e-12);
+        assert!((expected - s.com[0]).abs() > 0.25, "{expected}");
+        assert_eq!(catalogue::capture_outside(&moving, 0.05), 1.0, "at {v} m/s");
+        assert_eq!(catalogue::capture_outside(&moving, 0.5), 0.0, "at {v} m/s, 0.5 m margin");
+    }
 }
 
 #[test]

@@ -136,6 +136,9 @@ enum Binding {
         model: usize,
         side: usize,
     },
+    CaptureOutside {
+        model: usize,
+    },
     /// Always 0 (a sensor the adapter was told to ignore).
     Never,
 }
@@ -201,6 +204,7 @@ impl SensorInput for BodyEnv {
             Binding::GroundSlope { model } => catalogue::ground_slope(&s[model]),
             Binding::ComAheadOfAnkle { model, side } => catalogue::com_ahead_of_ankle(&s[model], side),
             Binding::FootDown { model, side } => catalogue::foot_down(&s[model], side),
+            Binding::CaptureOutside { model } => catalogue::capture_outside(&s[model], param(q.params, 0)),
             Binding::Never => 0.0,
         }
     }
@@ -325,6 +329,7 @@ impl Character {
                 "ground_slope" => Binding::GroundSlope { model },
                 "com_ahead_of_ankle" => Binding::ComAheadOfAnkle { model, side: side()? },
                 "foot_down" => Binding::FootDown { model, side: side()? },
+                "capture_outside" => Binding::CaptureOutside { model },
                 "never" => Binding::Never,
                 other => return Err(err(&format!("unknown sensor kind `{other}`"))),
             };

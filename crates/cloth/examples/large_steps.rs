@@ -738,7 +738,8 @@ fn drapes_section() -> Result<(), Error> {
 }
 
 /// One generalised-α drape with contact in the solve, set from the environment (`DRAPE` = bunny |
-/// table | sphere, `DT`, `NEWTON`, `RHO`): its error at each snapshot time against both references;
+/// table | sphere, `DT`, `NEWTON`, `RHO`; `E` and `MU` change the scene's restitution and friction):
+/// its error at each snapshot time against both references;
 /// with `POINTS` set, first each material point's distance from the faithful run at the last snapshot
 /// (mm, with the faithful position).
 fn drape_probe_section() -> Result<(), Error> {
@@ -746,8 +747,22 @@ fn drape_probe_section() -> Result<(), Error> {
     let slug = std::env::var("DRAPE").unwrap_or_else(|_| "sphere".into());
     let d = DRAPES.iter().find(|d| d.slug == slug).ok_or_else(|| format!("no drape `{slug}`"))?;
     let faithful_ref = drape_reference(d, &faithful(), "rk4-beta-1e-3")?;
-    let converged_ref = drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?;
-    let (scene, meshes) = load_drape(d)?;
+    let mut converged_ref = drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?;
+    let (mut scene, meshes) = load_drape(d)?;
+    // `E` (restitution) and `MU` (friction of the cloth and every object) change the scene; the
+    // converged reference is then run afresh with them.
+    if env("E").is_some() || env("MU").is_some() {
+        if let Some(e) = env("E") {
+            scene.restitution = e;
+        }
+        if let Some(mu) = env("MU") {
+            scene.material.friction = mu;
+            for o in &mut scene.objects {
+                o.friction = mu;
+            }
+        }
+        converged_ref = run_drape(&scene, &meshes, &converged_in_solve(), &d.snapshots, false)?.snapshots;
+    }
     let mut m = DrapeMethod::fixed(
         Integrator::GeneralizedAlpha,
         env("DT").unwrap_or(1.0 / 60.0),

@@ -1,5 +1,6 @@
 //! Runs the assisted backflip (`assets/controllers/backflip.ron`) at each spacing of the pair in
-//! `nunes::FLIP_SPACINGS` and prints one line per spacing (rotation, launch, landing, standing):
+//! `nunes::FLIP_SPACINGS` (with `FLIP_FINE=1`, in steps of 5 mm) and prints one line per spacing
+//! (rotation, launch, landing, standing):
 //! `cargo run --release -p anima-lab --example flip_spacings -- [label=value…]`.
 use anima_lab::nunes;
 
@@ -15,10 +16,16 @@ fn main() {
         let id = c.param_id(name).unwrap_or_else(|| panic!("no parameter {name}"));
         c.set_param(id, v.parse().expect("number"));
     }
-    for d in nunes::FLIP_SPACINGS {
+    // `FLIP_FINE=1`: every spacing of the range in steps of 5 mm instead.
+    let spacings = if std::env::var_os("FLIP_FINE").is_some() {
+        nunes::flip_fine_spacings()
+    } else {
+        nunes::FLIP_SPACINGS.to_vec()
+    };
+    for d in spacings {
         let o = nunes::backflip(c.clone(), d, 600, |_| ()).expect("backflip");
         println!(
-            "{d:.2} m: rot max {:.2} end {:.2} | foot on hands {:?} push {:?} E6 {:?} landed {:?} | \
+            "{d:.3} m: rot max {:.2} end {:.2} | foot on hands {:?} push {:?} E6 {:?} landed {:?} | \
              pelvis max {:.2} end {:.2} | fell {} pusher fell {} standing {} flipped {}",
             o.max_rotation,
             o.final_rotation,

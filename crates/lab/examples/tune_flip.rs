@@ -122,12 +122,44 @@ const FLIGHT_GENES: &[Gene] = &[
     g(&["B-ACRO-BODY/E8/acrobat/knee_l", "B-ACRO-BODY/E8/acrobat/knee_r"], -1.0, 0.0),
 ];
 
+/// `TUNE_GENES=step`: a recovery step after the landing (acrobat E9, fired when the capture point
+/// leaves the feet, its swing hip placed by the centre of mass's offset and speed) and the stance
+/// after it (E10).
+const STEP_GENES: &[Gene] = &[
+    g(&["B-ACRO-BODY/T8/p0"], -0.05, 0.2),
+    g(&["B-ACRO-BODY/T9/time"], 2.0, 10.0),
+    g(&["B-ACRO-BODY/E9/acrobat/hip_l"], -0.6, 0.8),
+    g(&["B-ACRO-BODY/E9/acrobat/knee_l"], -1.0, 0.0),
+    g(&["B-ACRO-BODY/E9/acrobat/hip_r"], -0.8, 0.8),
+    g(&["B-ACRO-BODY/E9/acrobat/hip_r/k0"], -1.0, 3.0),
+    g(&["B-ACRO-BODY/E9/acrobat/hip_r/k1"], -1.0, 3.0),
+    g(&["B-ACRO-BODY/E9/acrobat/knee_r"], -1.6, 0.0),
+    g(&["B-ACRO-BODY/E10/acrobat/hip_l"], -0.6, 0.8),
+    g(&["B-ACRO-BODY/E10/acrobat/hip_r"], -0.8, 0.8),
+    g(&["B-ACRO-BODY/E10/acrobat/hip_r/k0"], -1.0, 3.0),
+    g(&["B-ACRO-BODY/E10/acrobat/hip_r/k1"], -1.0, 3.0),
+    g(&["B-ACRO-BODY/E10/acrobat/knee_l", "B-ACRO-BODY/E10/acrobat/knee_r"], -1.0, 0.0),
+    g(&["B-ACRO-BODY/E10/acrobat/ankle_l", "B-ACRO-BODY/E10/acrobat/ankle_r"], -0.3, 0.6),
+    g(
+        &[
+            "B-ACRO-BODY/E10/acrobat/ankle_l/k0",
+            "B-ACRO-BODY/E10/acrobat/ankle_l/k2",
+            "B-ACRO-BODY/E10/acrobat/ankle_r/k0",
+            "B-ACRO-BODY/E10/acrobat/ankle_r/k2",
+        ],
+        -2.0,
+        1.0,
+    ),
+    g(&["B-ACRO-BODY/E10/acrobat/ankle_l/k1", "B-ACRO-BODY/E10/acrobat/ankle_r/k1"], -2.0, 1.0),
+];
+
 fn genes() -> &'static [Gene] {
     match std::env::var("TUNE_GENES").as_deref() {
         Ok("stand") => STAND_GENES,
         // The acrobat's landing alone, for a controller whose pusher E4 has no feedback.
         Ok("landing") => &STAND_GENES[..STAND_GENES.len() - 2],
         Ok("flight") => FLIGHT_GENES,
+        Ok("step") => STEP_GENES,
         // The flight and the landing's feedback gains together.
         Ok("flight-landing") => {
             static BOTH: std::sync::OnceLock<Vec<Gene>> = std::sync::OnceLock::new();
@@ -154,7 +186,7 @@ fn set(c: &mut Controller, label: &str, v: f64) {
 
 fn fix_inter_thigh(c: &mut Controller) {
     for (m, model) in [("B-PUSHER", "pusher"), ("B-ACRO-BODY", "acrobat")] {
-        for e in 1..=8 {
+        for e in 1..=10 {
             let hip = |c: &Controller, side: &str| {
                 c.param_id(&format!("{m}/E{e}/{model}/hip_{side}")).map(|id| c.param(id))
             };

@@ -38,6 +38,7 @@ const CATALOGUE: &[&str] = &[
     "foot_down",
     "trunk_rate",
     "ground_slope",
+    "capture_outside",
 ];
 
 #[test]

@@ -723,6 +723,26 @@ pub const FLIP_SPACING: f64 = 0.9;
 /// The spacings of the pair at which the backflip must land standing (issue #18): 0.86 to 0.94 m.
 pub const FLIP_SPACINGS: [f64; 5] = [0.86, 0.88, 0.9, 0.92, 0.94];
 
+/// The spacings of [`FLIP_SPACINGS`]' range in steps of 5 mm (0.86, 0.865, …, 0.94 m): the flip at
+/// spacings it was not tuned at.
+pub fn flip_fine_spacings() -> Vec<f64> {
+    let (near, far) = (FLIP_SPACINGS[0], FLIP_SPACINGS[FLIP_SPACINGS.len() - 1]);
+    let steps = ((far - near) / 0.005).round() as usize;
+    (0..=steps).map(|k| near + 0.005 * k as f64).collect()
+}
+
+/// The backflip controller's label of the margin of its recovery step's trigger (the acrobat's T8,
+/// `capture_outside`).
+pub const FLIP_STEP_MARGIN: &str = "B-ACRO-BODY/T8/p0";
+
+/// `c` (the backflip controller) with its recovery step disabled: T8's margin so wide (100 m) that
+/// the capture point never leaves it, so the acrobat keeps its landing stance E8 whatever happens.
+pub fn without_recovery_step(mut c: Controller) -> Controller {
+    let id = c.param_id(FLIP_STEP_MARGIN).expect("the backflip's T8 margin");
+    c.set_param(id, 100.0);
+    c
+}
+
 /// The backflip pair (spec §3.5.2): the acrobat facing +x at x = 0 and the pusher facing −x
 /// `spacing` m in front of it, driven by one controller with model aliases `acrobat` and `pusher`.
 pub fn backflip_character(controller: Controller, spacing: f64) -> Result<Character, CharacterError> {

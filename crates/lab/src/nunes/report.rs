@@ -696,8 +696,9 @@ fn flip() -> Result<String> {
          [RECON]); the thesis's timings except the pusher's T3 (20 iterations, not 50); \
          beyond the thesis: feedback on the trunk's rotation rate in the tuck and brake (E6, E7), \
          SIMBICON-style balance feedback on the acrobat's trunk and ankles after the landing (E8) and on \
-         the pusher's ankles after the push (E4), and the flight and landing tuned over the five \
-         spacings below jointly; spacing {:.2} m; {} iterations.\n",
+         the pusher's ankles after the push (E4), the flight and landing tuned over the five \
+         spacings below jointly, and a recovery step (E9, then the stance E10) when the capture point \
+         leaves the feet after the landing; spacing {:.2} m; {} iterations.\n",
         nunes::FLIP_SPACING,
         FLIP_ITERATIONS
     );
@@ -782,27 +783,36 @@ fn flip() -> Result<String> {
             yes(o.flipped())
         );
     }
-    // Between the spacings it was tuned at: whether the flip holds for a spacing it never saw.
-    let (near, far) = (nunes::FLIP_SPACINGS[0], nunes::FLIP_SPACINGS[nunes::FLIP_SPACINGS.len() - 1]);
-    let steps = ((far - near) / 0.005).round() as usize;
-    let fine: Vec<f64> = (0..=steps).map(|k| near + 0.005 * k as f64).collect();
+    // Between the spacings it was tuned at: whether the flip holds for a spacing it never saw, with and
+    // without the recovery step.
+    let fine = nunes::flip_fine_spacings();
     let mut complete = Vec::new();
+    let mut failed = Vec::new();
+    let mut without_step = 0;
     for &d in &fine {
         let o = nunes::backflip(c.clone(), d, FLIP_ITERATIONS, |_| ())?;
         if o.flipped() && !o.pusher_fell {
             complete.push(format!("{d:.3}"));
+        } else {
+            failed.push(format!("{d:.3} m (largest rotation {:.2} rad)", o.max_rotation));
         }
+        let plain = nunes::backflip(nunes::without_recovery_step(c.clone()), d, FLIP_ITERATIONS, |_| ())?;
+        without_step += usize::from(plain.flipped() && !plain.pusher_fell);
     }
     let _ = writeln!(
         s,
         "\nIn steps of 5 mm from {:.2} to {:.2} m, the flip is complete (acrobat standing, pusher up) at {} of {} \
-         spacings: {} m. Between the spacings it was tuned at, it mostly is not: the launch and the flight are \
-         sensitive to millimetres, and the landing cannot absorb the rotation and speed errors that follow.",
+         spacings: {} m; without the recovery step (E9, E10; T8 never firing) at {} of {}. It fails at {}: \
+         the launch and the flight are sensitive to millimetres, and the landing and its step do not \
+         absorb every rotation that follows.",
         fine[0],
         fine[fine.len() - 1],
         complete.len(),
         fine.len(),
-        complete.join(", ")
+        complete.join(", "),
+        without_step,
+        fine.len(),
+        if failed.is_empty() { "none".to_string() } else { failed.join(", ") }
     );
     Ok(s)
 }
