@@ -41,8 +41,9 @@ enum Command {
     /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
     /// nunes-simbicon-faithful (SIMBICON as published, unoptimised; nunes-simbicon.md) and
     /// nunes-protocol (CMA-ES for pushes, slopes, steps and 1 m/s, both walker forms over --seeds
-    /// seeds; nunes-protocol.md) and nunes-slopes (the protocol walker's slope gains, over --seeds
-    /// seeds, default 3; nunes-slopes.md).
+    /// seeds; nunes-protocol.md), nunes-slopes (the protocol walker's slope gains, over --seeds
+    /// seeds, default 3; nunes-slopes.md) and nunes-speeds (walkers for 0.5, 1.0 and 1.5 m/s, over
+    /// --seeds seeds, default 2; nunes-speeds.md).
     Reproduce {
         experiment: String,
         /// Friction reading for the FLEX3D experiments (the report holds the literal reading's results;
@@ -121,6 +122,7 @@ fn reproduce(
         }
         "nunes-protocol" => return nunes::protocol::reproduce(repo, seeds.unwrap_or(5)),
         "nunes-slopes" => return nunes::protocol::reproduce_slopes(repo, seeds.unwrap_or(3)),
+        "nunes-speeds" => return nunes::speeds::reproduce(repo, seeds.unwrap_or(2)),
         "nunes-robust" => {
             print!("{}", nunes::optimisers::robust(repo)?);
             return Ok(());

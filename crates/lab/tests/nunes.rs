@@ -669,3 +669,19 @@ fn the_slope_gains_follow_the_pose_numbers() {
     }
     assert_eq!(walk_poses::layout().len(), 32);
 }
+
+#[test]
+fn the_speed_walkers_keep_their_speeds_without_flight() {
+    // Issue #18's target speeds: each committed walker stays up for a minute on the flat within
+    // 0.1 m/s of its target, with no control step spent with neither foot on the ground (the search
+    // penalised flight; the protocol walker, searched without that penalty, spends 12 % of its steps
+    // in the air).
+    for target in nunes::speeds::TARGETS {
+        let c = nunes::controller(&nunes::speeds::walker_name(target)).unwrap();
+        let (fraction, distance, flight) = nunes::speeds::walk_with_flight(&c, nunes::protocol::MINUTE, &[]);
+        let speed = distance / 60.0;
+        assert_eq!(fraction, 1.0, "{target} m/s: fell");
+        assert!((speed - target).abs() <= 0.1, "{target} m/s: walks at {speed:.3} m/s");
+        assert!(flight <= 0.01, "{target} m/s: {:.1} % of steps in flight", 100.0 * flight);
+    }
+}

@@ -9,6 +9,7 @@ pub mod figures;
 pub mod optimisers;
 pub mod protocol;
 pub mod report;
+pub mod speeds;
 
 use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, SolverSettings, World, WorldSettings};
 use anima_control::Controller;

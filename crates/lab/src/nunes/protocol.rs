@@ -106,20 +106,26 @@ pub fn largest_torso_push(c: &Controller, build: Build, direction: f64, step: f6
 }
 
 /// Control steps of each walk of the objective (30 s).
-const SCORE_ITERATIONS: u64 = 600;
+pub(crate) const SCORE_ITERATIONS: u64 = 600;
 /// The pushes of the objective: SIMBICON's 70 N·s each way, 15 s into a walk.
-const SCORE_PUSH: f64 = 70.0;
+pub(crate) const SCORE_PUSH: f64 = 70.0;
 /// Weight of the speed error (per m/s) against one walk's credit (1).
-const SPEED_WEIGHT: f64 = 4.0;
+pub(crate) const SPEED_WEIGHT: f64 = 4.0;
 /// A walk earns full credit when it covers at least this fraction of the distance the target speed
 /// would: standing still or marking time at the foot of a slope is not walking it.
 const PROGRESS: f64 = 0.5;
 
 /// One objective walk's credit, from (fraction walked before any fall, distance): the fraction times
 /// the progress, the distance over half of what the target speed covers in the walk, at most 1.
-fn credit((fraction, distance): (f64, f64)) -> f64 {
+fn credit(walk: (f64, f64)) -> f64 {
+    credit_at(walk, TARGET_SPEED)
+}
+
+/// [`credit`] for a walker meant to go at `target` m/s: the progress counts against half of what
+/// `target` covers in an objective walk.
+pub(crate) fn credit_at((fraction, distance): (f64, f64), target: f64) -> f64 {
     let seconds = SCORE_ITERATIONS as f64 * nunes::DT;
-    fraction * (distance / (PROGRESS * TARGET_SPEED * seconds)).clamp(0.0, 1.0)
+    fraction * (distance / (PROGRESS * target * seconds)).clamp(0.0, 1.0)
 }
 
 /// The protocol's objective (to maximise, at most 9): over nine 30 s walks — on the flat, after torso
