@@ -747,22 +747,24 @@ fn drape_probe_section() -> Result<(), Error> {
     let slug = std::env::var("DRAPE").unwrap_or_else(|_| "sphere".into());
     let d = DRAPES.iter().find(|d| d.slug == slug).ok_or_else(|| format!("no drape `{slug}`"))?;
     let faithful_ref = drape_reference(d, &faithful(), "rk4-beta-1e-3")?;
-    let mut converged_ref = drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?;
     let (mut scene, meshes) = load_drape(d)?;
     // `E` (restitution) and `MU` (friction of the cloth and every object) change the scene; the
-    // converged reference is then run afresh with them.
-    if env("E").is_some() || env("MU").is_some() {
-        if let Some(e) = env("E") {
-            scene.restitution = e;
-        }
-        if let Some(mu) = env("MU") {
-            scene.material.friction = mu;
-            for o in &mut scene.objects {
-                o.friction = mu;
-            }
-        }
-        converged_ref = run_drape(&scene, &meshes, &converged_in_solve(), &d.snapshots, false)?.snapshots;
+    // converged reference is then run afresh with them instead of read from the cache.
+    let (e, mu) = (env("E"), env("MU"));
+    if let Some(e) = e {
+        scene.restitution = e;
     }
+    if let Some(mu) = mu {
+        scene.material.friction = mu;
+        for o in &mut scene.objects {
+            o.friction = mu;
+        }
+    }
+    let converged_ref = if e.is_some() || mu.is_some() {
+        run_drape(&scene, &meshes, &converged_in_solve(), &d.snapshots, false)?.snapshots
+    } else {
+        drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?
+    };
     let mut m = DrapeMethod::fixed(
         Integrator::GeneralizedAlpha,
         env("DT").unwrap_or(1.0 / 60.0),

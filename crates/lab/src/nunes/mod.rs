@@ -358,32 +358,29 @@ pub mod walk_poses {
     /// The pose entries the twelve numbers set, as (`W-LEGS/<state>/<joint>`, source): E1 and E3 with
     /// the left leg swinging, and their mirrors E4 and E6.
     pub fn layout() -> Vec<(String, Source)> {
+        use Source::{Fixed, Number};
+        // Per pair of mirrored states: the swing leg's hip, knee and ankle numbers, and the stance
+        // leg's hip, knee and ankle sources.
+        let groups = [
+            (["E1", "E4"], [1, 2, 3], [Number(4), Number(5), Number(6)]),
+            (["E3", "E6"], [7, 8, 9], [Number(10), Fixed(-0.05), Number(11)]),
+        ];
         let mut out = Vec::new();
-        for (state, sw, st) in [("E1", "l", "r"), ("E4", "r", "l")] {
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            out.extend([
-                (format!("W-LEGS/{state}/waist"), Source::Number(0)),
-                (format!("W-LEGS/{state}/hip_{sw}"), Source::Number(1)),
-                (format!("W-LEGS/{state}/knee_{sw}"), Source::Number(2)),
-                (format!("W-LEGS/{state}/ankle_{sw}"), Source::Number(3)),
-                (format!("W-LEGS/{state}/hip_{st}"), Source::Number(4)),
-                (format!("W-LEGS/{state}/knee_{st}"), Source::Number(5)),
-                (format!("W-LEGS/{state}/ankle_{st}"), Source::Number(6)),
-                (format!("W-LEGS/{state}/inter_thigh"), Source::Difference(s, 1, 4)),
-            ]);
-        }
-        for (state, sw, st) in [("E3", "l", "r"), ("E6", "r", "l")] {
-            let s = if sw == "l" { 1.0 } else { -1.0 };
-            out.extend([
-                (format!("W-LEGS/{state}/waist"), Source::Number(0)),
-                (format!("W-LEGS/{state}/hip_{sw}"), Source::Number(7)),
-                (format!("W-LEGS/{state}/knee_{sw}"), Source::Number(8)),
-                (format!("W-LEGS/{state}/ankle_{sw}"), Source::Number(9)),
-                (format!("W-LEGS/{state}/hip_{st}"), Source::Number(10)),
-                (format!("W-LEGS/{state}/knee_{st}"), Source::Fixed(-0.05)),
-                (format!("W-LEGS/{state}/ankle_{st}"), Source::Number(11)),
-                (format!("W-LEGS/{state}/inter_thigh"), Source::Difference(s, 7, 10)),
-            ]);
+        for (states, swing, stance) in groups {
+            let Number(stance_hip) = stance[0] else { unreachable!("the stance hip is a pose number") };
+            for (state, sw, st) in [(states[0], "l", "r"), (states[1], "r", "l")] {
+                let s = if sw == "l" { 1.0 } else { -1.0 };
+                out.extend([
+                    (format!("W-LEGS/{state}/waist"), Number(0)),
+                    (format!("W-LEGS/{state}/hip_{sw}"), Number(swing[0])),
+                    (format!("W-LEGS/{state}/knee_{sw}"), Number(swing[1])),
+                    (format!("W-LEGS/{state}/ankle_{sw}"), Number(swing[2])),
+                    (format!("W-LEGS/{state}/hip_{st}"), stance[0]),
+                    (format!("W-LEGS/{state}/knee_{st}"), stance[1]),
+                    (format!("W-LEGS/{state}/ankle_{st}"), stance[2]),
+                    (format!("W-LEGS/{state}/inter_thigh"), Source::Difference(s, swing[0], stance_hip)),
+                ]);
+            }
         }
         out
     }
@@ -738,6 +735,9 @@ pub const FLIP_STEP_MARGIN: &str = "B-ACRO-BODY/T8/p0";
 
 /// `c` (the backflip controller) with its recovery step disabled: T8's margin so wide (100 m) that
 /// the capture point never leaves it, so the acrobat keeps its landing stance E8 whatever happens.
+///
+/// # Panics
+/// If `c` has no parameter [`FLIP_STEP_MARGIN`] (it is not the backflip controller).
 pub fn without_recovery_step(mut c: Controller) -> Controller {
     let id = c.param_id(FLIP_STEP_MARGIN).expect("the backflip's T8 margin");
     c.set_param(id, 100.0);

@@ -64,10 +64,22 @@ pub const PUSH_RECOVERY: u64 = 200;
 /// How a walk of `iterations` control steps on `relief` under `pushes` went: the fraction of it walked
 /// before any fall, and the distance.
 pub fn walk_on(c: &Controller, build: Build, relief: Relief, iterations: u64, pushes: &[Push]) -> (f64, f64) {
+    walk_observed(c, build, relief, iterations, pushes, |_| ())
+}
+
+/// [`walk_on`], with `observe` seeing the character after every control step walked.
+pub fn walk_observed(
+    c: &Controller,
+    build: Build,
+    relief: Relief,
+    iterations: u64,
+    pushes: &[Push],
+    observe: impl FnMut(&Character),
+) -> (f64, f64) {
     let rules = WalkRules { window: 0, ..WalkRules::default() };
     let ground = Ground { relief, ..flat() };
     let Ok(character) = build(c.clone(), ground) else { return (0.0, 0.0) };
-    match nunes::walk_character(character, iterations, &rules, pushes, |_| ()) {
+    match nunes::walk_character(character, iterations, &rules, pushes, observe) {
         Ok(o) if !o.fell => (1.0, o.distance),
         Ok(o) => (o.iterations as f64 / iterations as f64, o.distance),
         Err(_) => (0.0, 0.0),

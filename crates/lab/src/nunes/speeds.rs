@@ -9,13 +9,13 @@
 
 use std::fmt::Write as _;
 
-use anima_body::Support;
+use anima_body::{Relief, Support};
 use anima_control::Controller;
 use anyhow::Result;
 
 use super::optimisers::{cmaes_search, walker_poses, with_poses};
 use super::protocol::{self, MINUTE, SCORE_ITERATIONS, SCORE_PUSH, SPEED_WEIGHT, credit_at, humanoid};
-use crate::nunes::{self, Push, WalkRules};
+use crate::nunes::{self, Push};
 use crate::repo::Repo;
 
 /// The speeds searched for, m/s.
@@ -29,19 +29,12 @@ pub const FLIGHT_WEIGHT: f64 = 2.0;
 /// A walk on the flat of `iterations` control steps under `pushes`: (fraction walked before any fall,
 /// distance, fraction of the steps walked with neither foot on the ground).
 pub fn walk_with_flight(c: &Controller, iterations: u64, pushes: &[Push]) -> (f64, f64, f64) {
-    let rules = WalkRules { window: 0, ..WalkRules::default() };
-    let Ok(character) = humanoid(c.clone(), protocol::flat()) else { return (0.0, 0.0, 0.0) };
-    let mut airborne = 0u64;
-    let out = nunes::walk_character(character, iterations, &rules, pushes, |ch| {
+    let (mut walked, mut airborne) = (0u64, 0u64);
+    let (fraction, distance) = protocol::walk_observed(c, humanoid, Relief::Flat, iterations, pushes, |ch| {
+        walked += 1;
         airborne += u64::from(ch.env.sensors[0].support == Support::None);
     });
-    match out {
-        Ok(o) => {
-            let fraction = if o.fell { o.iterations as f64 / iterations as f64 } else { 1.0 };
-            (fraction, o.distance, airborne as f64 / o.iterations.max(1) as f64)
-        }
-        Err(_) => (0.0, 0.0, 0.0),
-    }
+    (fraction, distance, airborne as f64 / walked.max(1) as f64)
 }
 
 /// The speed search's objective (at most 3): three 30 s walks on the flat — unpushed, and after torso
