@@ -741,13 +741,24 @@ fn drapes_section() -> Result<(), Error> {
 /// table | sphere, `DT`, `NEWTON`, `RHO`; `E` and `MU` change the scene's restitution and friction):
 /// its error at each snapshot time against both references;
 /// with `POINTS` set, first each material point's distance from the faithful run at the last snapshot
-/// (mm, with the faithful position).
+/// (mm, with the faithful position); with `TRACE` = a particle's index, first its position in the run
+/// and in both references at each snapshot. `TIMES` (comma-separated seconds, on the step's grid)
+/// replaces the thesis's snapshot times, both references then run afresh.
 fn drape_probe_section() -> Result<(), Error> {
     let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
     let slug = std::env::var("DRAPE").unwrap_or_else(|_| "sphere".into());
     let d = DRAPES.iter().find(|d| d.slug == slug).ok_or_else(|| format!("no drape `{slug}`"))?;
-    let faithful_ref = drape_reference(d, &faithful(), "rk4-beta-1e-3")?;
+    // `TIMES` (comma-separated seconds) compares at other times than the thesis's snapshots; both
+    // references are then run afresh.
+    let times: Option<Vec<f64>> =
+        std::env::var("TIMES").ok().map(|s| s.split(',').filter_map(|t| t.trim().parse().ok()).collect());
+    let snaps = times.clone().unwrap_or_else(|| d.snapshots.to_vec());
     let (mut scene, meshes) = load_drape(d)?;
+    let faithful_ref = if times.is_some() {
+        run_drape(&scene, &meshes, &faithful(), &snaps, false)?.snapshots
+    } else {
+        drape_reference(d, &faithful(), "rk4-beta-1e-3")?
+    };
     // `E` (restitution) and `MU` (friction of the cloth and every object) change the scene; the
     // converged reference is then run afresh with them instead of read from the cache.
     let (e, mu) = (env("E"), env("MU"));
@@ -760,8 +771,8 @@ fn drape_probe_section() -> Result<(), Error> {
             o.friction = mu;
         }
     }
-    let converged_ref = if e.is_some() || mu.is_some() {
-        run_drape(&scene, &meshes, &converged_in_solve(), &d.snapshots, false)?.snapshots
+    let converged_ref = if e.is_some() || mu.is_some() || times.is_some() {
+        run_drape(&scene, &meshes, &converged_in_solve(), &snaps, false)?.snapshots
     } else {
         drape_reference(d, &converged_in_solve(), "alpha-in-solve-16000-newton-8")?
     };
@@ -772,7 +783,7 @@ fn drape_probe_section() -> Result<(), Error> {
     );
     m.method.newton = env("NEWTON").map(|k| k as usize);
     m.method.rho_inf = env("RHO");
-    let out = run_drape(&scene, &meshes, &m, &d.snapshots, true)?;
+    let out = run_drape(&scene, &meshes, &m, &snaps, true)?;
     let per = |r: &[Vec<DVec3>]| {
         out.snapshots
             .iter()
@@ -781,6 +792,13 @@ fn drape_probe_section() -> Result<(), Error> {
             .collect::<Vec<_>>()
             .join(" ")
     };
+    if let Some(k) = env("TRACE") {
+        let k = k as usize;
+        for ((t, a), (b, f)) in snaps.iter().zip(&out.snapshots).zip(converged_ref.iter().zip(&faithful_ref))
+        {
+            println!("t {t:.4}: {:+.4?} converged {:+.4?} thesis {:+.4?}", a[k], b[k], f[k]);
+        }
+    }
     if std::env::var("POINTS").is_ok() {
         let (a, b) = (out.snapshots.last().expect("snapshots"), faithful_ref.last().expect("snapshots"));
         for r in (0..17).step_by(4) {
@@ -800,7 +818,7 @@ fn drape_probe_section() -> Result<(), Error> {
         m.label(),
         out.wall_s,
         out.most_inside,
-        d.snapshots,
+        snaps,
         per(&faithful_ref),
         per(&converged_ref)
     );

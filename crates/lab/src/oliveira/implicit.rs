@@ -35,6 +35,20 @@
 //! those decisions moves the sensitivity rather than removing it (tried, not kept): releasing a contact
 //! only once it pulls with 5 % of its reaction took the Bunny's to 2.1 mm and the table's to 21 mm, and
 //! activating one only past a small violation left the Bunny's at 36 mm and took the table's to 21 mm.
+//!
+//! A last table takes the in-solve error at 1/60–1/240 s apart by contact law: the run and its converged
+//! reference again with no bounce (e = 0), no friction (μ = 0) or neither. What is left with neither is
+//! the integrator's error on the cloth's own motion (and where contacts are found); what the bounce and
+//! the friction add is the cost of deciding them once per step. Measured at 1/60 s: the sphere's 23.4 mm
+//! is 9.1 mm without the bounce and 12.7 mm with neither bounce nor friction (all under 5.3 mm at
+//! 1/120 s); the Bunny stays at 35–50 mm under every law (and moves 35 mm under the sensitivity study's
+//! perturbation). The table's outliers (31.5 mm at 1/240 s with its own law, 21.3 mm at 1/120 s with
+//! e = 0, against 2–6 mm in the other cells) are one pattern: a quadrant of the cloth (two opposite ones
+//! at 1/240 s, one at 1/120 s) ends 45 mm off just below the table's rim and 85 mm off at its corner, the
+//! rest within 5 mm. Friction near its limit there makes the drape bistable per quadrant, and which way a
+//! quadrant goes flips with details far from the step's accuracy: at 1/240 s, allowing 16 regime changes
+//! per contact and step instead of 4 brought it to 0.7 mm from the thesis's run, and 20 Newton
+//! iterations on top of that took it to 31.0 mm again (tried, not kept).
 
 use std::fmt::Write as _;
 use std::ops::ControlFlow;
@@ -64,8 +78,10 @@ pub struct Method {
     pub contact: ContactMode,
     /// Newton iterations per step of an implicit method (`None`: the integrator's default).
     pub newton: Option<usize>,
-    /// Friction off on the cloth and on every object (the model-gap study).
+    /// Friction off on the cloth and on every object (the model-gap and attribution studies).
     pub frictionless: bool,
+    /// Restitution 0: contacts do not bounce (the attribution study).
+    pub inelastic: bool,
     /// Gravity scaled by this factor: 1, or [`PERTURBED_GRAVITY`] in the sensitivity study.
     pub gravity_scale: f64,
 }
@@ -89,6 +105,7 @@ impl Method {
             contact: ContactMode::AfterStep,
             newton: None,
             frictionless: false,
+            inelastic: false,
             gravity_scale: 1.0,
         }
     }
@@ -104,6 +121,7 @@ impl Method {
             contact: ContactMode::AfterStep,
             newton: None,
             frictionless: false,
+            inelastic: false,
             gravity_scale: 1.0,
         }
     }
@@ -117,6 +135,9 @@ impl Method {
         let mut s = self.integrator.to_string();
         if let Some(LinearSolver::SparseCholesky) = self.solver {
             s.push_str("+cholesky");
+        }
+        if self.inelastic {
+            s.push_str(", e = 0");
         }
         if self.frictionless {
             s.push_str(", μ = 0");
@@ -166,6 +187,9 @@ fn build(repo: &Repo, d: &Drape, m: &Method) -> Result<AdaptiveCloth> {
         for o in &mut loaded.scene.objects {
             o.friction = 0.0;
         }
+    }
+    if m.inelastic {
+        loaded.scene.restitution = 0.0;
     }
     loaded.scene.gravity_m_s2 *= m.gravity_scale;
     let mut cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
@@ -334,6 +358,7 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
     let mut summary = String::new();
     let mut gaps = String::new();
     let mut sensitivity = String::new();
+    let mut attribution = String::new();
     for d in &TESTS {
         let [(faithful_name, faithful_m), (converged_name, converged_m)] = references();
         let faithful = reference(repo, d, &faithful_m, faithful_name)?;
@@ -374,6 +399,7 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
             writeln!(gaps, "| {} | {:.1} mm | {:.1} mm |", d.short_title, model_gap * 1e3, gap_mu_0 * 1e3);
         section(repo, &mut doc, d, &rows, model_gap)?;
         sensitivity_rows(repo, d, &rows, &mut sensitivity)?;
+        attribution_rows(repo, d, &rows, &mut attribution)?;
         let at_60 = rows.iter().find(|r| r.method == Method::in_solve(1.0 / 60.0));
         if let Some(Row { outcome: Some(o), vs_faithful, vs_same_model, .. }) = at_60 {
             let _ = writeln!(
@@ -411,6 +437,18 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
          far below anything the step controls (a contact regime that flips, a fold that goes the other way): \
          an error of the same size against a reference cannot be read as the step's.\n\n\
          | drape | method | step | moved by | its RMS vs the thesis |\n|---|---|---|---|---|\n{sensitivity}\n"
+    );
+    let _ = write!(
+        doc,
+        "## What the in-solve error at large steps is made of\n\n\
+         Generalised-α with contact in the solve at the steps a user would choose, with the scenes' contact law \
+         and with its restitution, its friction or both turned off (e = 0: no bounce; μ = 0 on the cloth and \
+         every object), each against the same law run to convergence (its own reference at 1/16 000 s with 8 \
+         Newton iterations, recomputed for each law). The error left with e = 0 and μ = 0 is the integrator's \
+         on the cloth's own motion plus where contacts are found; what the bounce or the friction add on top \
+         is theirs: decisions (bounce on arrival, stick or slide) taken once per step, from the velocity at \
+         the start of the step, where the converged run takes them at the moment of each impact.\n\n\
+         | drape | step | scene's law | e = 0 | μ = 0 | e = 0, μ = 0 |\n|---|---|---|---|---|---|\n{attribution}\n"
     );
     repo.write_text("docs/reproduction/oliveira-implicit.md", &doc)
 }
@@ -450,6 +488,45 @@ fn sensitivity_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> R
             worst_rms(&moved.snapshots, &base.snapshots) * 1e3,
             vs_faithful * 1e3
         );
+    }
+    Ok(())
+}
+
+/// The contact laws of the attribution study: (cache suffix, inelastic, frictionless).
+const LAWS: [(&str, bool, bool); 4] =
+    [("", false, false), ("-e-0", true, false), ("-mu-0", false, true), ("-e-0-mu-0", true, true)];
+
+/// The steps of the attribution study.
+const ATTRIBUTION_STEPS: [f64; 3] = [60.0, 120.0, 240.0];
+
+/// Appends one row per step of [`ATTRIBUTION_STEPS`]: generalised-α in the solve against its own
+/// converged run under each of [`LAWS`] (the scene's law taken from `rows`).
+fn attribution_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> Result<()> {
+    let [_, (converged_name, converged_m)] = references();
+    let mut converged = Vec::new();
+    for (suffix, inelastic, frictionless) in LAWS {
+        let m = Method { inelastic, frictionless, ..converged_m };
+        converged.push(reference(repo, d, &m, &format!("{converged_name}{suffix}"))?);
+    }
+    for per_s in ATTRIBUTION_STEPS {
+        let _ = write!(out, "| {} | 1/{per_s:.0} s |", d.short_title);
+        for ((_, inelastic, frictionless), reference) in LAWS.iter().zip(&converged) {
+            let m = Method {
+                inelastic: *inelastic,
+                frictionless: *frictionless,
+                ..Method::in_solve(1.0 / per_s)
+            };
+            let run_here = || -> Result<Outcome> {
+                eprintln!("anima-lab: {} — {} at {}", d.short_title, m.label(), m.step_label());
+                run(repo, d, &m)
+            };
+            let outcome = match rows.iter().find(|r| r.method == m) {
+                Some(Row { outcome: Some(o), .. }) => o.clone(),
+                _ => run_here()?,
+            };
+            let _ = write!(out, " {:.1} mm |", worst_rms(&outcome.snapshots, &reference.snapshots) * 1e3);
+        }
+        out.push('\n');
     }
     Ok(())
 }
