@@ -39,9 +39,11 @@
 //! A last table takes the in-solve error at 1/60–1/240 s apart by contact law: the run and its converged
 //! reference again with no bounce (e = 0), no friction (μ = 0) or neither. What is left with neither is
 //! the integrator's error on the cloth's own motion (and where contacts are found); what the bounce and
-//! the friction add is the cost of deciding them once per step. Measured at 1/60 s: the sphere's 23.4 mm
-//! is 9.1 mm without the bounce and 12.7 mm with neither bounce nor friction (all under 5.3 mm at
-//! 1/120 s); the Bunny stays at 35–50 mm under every law (and moves 35 mm under the sensitivity study's
+//! the friction add is the cost of deciding them once per step; two more columns run with ρ∞ = 1 to show
+//! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 23.4 mm is 9.1 mm without the
+//! bounce, 12.7 mm with neither bounce nor friction and 6.5 mm with neither and no damping, but 19.2 mm
+//! with its own law and no damping: no one change brings it near 5 mm (all its cells are under 5.3 mm at
+//! 1/120 s). The Bunny stays at 33–63 mm in every cell (and moves 35 mm under the sensitivity study's
 //! perturbation). The table's outliers (31.5 mm at 1/240 s with its own law, 21.3 mm at 1/120 s with
 //! e = 0, against 2–6 mm in the other cells) are one pattern: a quadrant of the cloth (two opposite ones
 //! at 1/240 s, one at 1/120 s) ends 45 mm off just below the table's rim and 85 mm off at its corner, the
@@ -84,6 +86,8 @@ pub struct Method {
     pub inelastic: bool,
     /// Gravity scaled by this factor: 1, or [`PERTURBED_GRAVITY`] in the sensitivity study.
     pub gravity_scale: f64,
+    /// Generalised-α's ρ∞ (`None`: the stepper's default), for the attribution study.
+    pub rho_inf: Option<f64>,
 }
 
 /// The perturbation of the sensitivity study: gravity scaled by 1 + 10⁻⁹, a change far below any
@@ -107,6 +111,7 @@ impl Method {
             frictionless: false,
             inelastic: false,
             gravity_scale: 1.0,
+            rho_inf: None,
         }
     }
 
@@ -123,6 +128,7 @@ impl Method {
             frictionless: false,
             inelastic: false,
             gravity_scale: 1.0,
+            rho_inf: None,
         }
     }
 
@@ -135,6 +141,9 @@ impl Method {
         let mut s = self.integrator.to_string();
         if let Some(LinearSolver::SparseCholesky) = self.solver {
             s.push_str("+cholesky");
+        }
+        if let Some(r) = self.rho_inf {
+            let _ = write!(s, " ρ∞ = {r}");
         }
         if self.inelastic {
             s.push_str(", e = 0");
@@ -195,6 +204,9 @@ fn build(repo: &Repo, d: &Drape, m: &Method) -> Result<AdaptiveCloth> {
     let mut cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
     if let Some(s) = m.solver {
         cloth.stepper_mut().set_linear_solver(s);
+    }
+    if let Some(r) = m.rho_inf {
+        cloth.stepper_mut().set_spectral_radius(r);
     }
     if let Some(k) = m.newton {
         cloth.stepper_mut().set_newton_iterations(k);
@@ -447,8 +459,11 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
          Newton iterations, recomputed for each law). The error left with e = 0 and μ = 0 is the integrator's \
          on the cloth's own motion plus where contacts are found; what the bounce or the friction add on top \
          is theirs: decisions (bounce on arrival, stick or slide) taken once per step, from the velocity at \
-         the start of the step, where the converged run takes them at the moment of each impact.\n\n\
-         | drape | step | scene's law | e = 0 | μ = 0 | e = 0, μ = 0 |\n|---|---|---|---|---|---|\n{attribution}\n"
+         the start of the step, where the converged run takes them at the moment of each impact. The last \
+         two columns repeat the first and the fourth with ρ∞ = 1 (no numerical damping, against the default \
+         0.2): the part of the error that is generalised-α's damping of the cloth's own motion.\n\n\
+         | drape | step | scene's law | e = 0 | μ = 0 | e = 0, μ = 0 | scene's law, ρ∞ = 1 | e = 0, μ = 0, ρ∞ = 1 |\n\
+         |---|---|---|---|---|---|---|---|\n{attribution}\n"
     );
     repo.write_text("docs/reproduction/oliveira-implicit.md", &doc)
 }
@@ -508,14 +523,14 @@ fn attribution_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> R
         let m = Method { inelastic, frictionless, ..converged_m };
         converged.push(reference(repo, d, &m, &format!("{converged_name}{suffix}"))?);
     }
+    // The four laws at the default ρ∞, then the scene's law and neither bounce nor friction undamped.
+    let columns: Vec<(usize, Option<f64>)> =
+        (0..LAWS.len()).map(|k| (k, None)).chain([(0, Some(1.0)), (LAWS.len() - 1, Some(1.0))]).collect();
     for per_s in ATTRIBUTION_STEPS {
         let _ = write!(out, "| {} | 1/{per_s:.0} s |", d.short_title);
-        for ((_, inelastic, frictionless), reference) in LAWS.iter().zip(&converged) {
-            let m = Method {
-                inelastic: *inelastic,
-                frictionless: *frictionless,
-                ..Method::in_solve(1.0 / per_s)
-            };
+        for &(law, rho_inf) in &columns {
+            let ((_, inelastic, frictionless), reference) = (LAWS[law], &converged[law]);
+            let m = Method { inelastic, frictionless, rho_inf, ..Method::in_solve(1.0 / per_s) };
             let run_here = || -> Result<Outcome> {
                 eprintln!("anima-lab: {} — {} at {}", d.short_title, m.label(), m.step_label());
                 run(repo, d, &m)
