@@ -40,17 +40,18 @@
 //! reference again with no bounce (e = 0), no friction (μ = 0) or neither. What is left with neither is
 //! the integrator's error on the cloth's own motion (and where contacts are found); what the bounce and
 //! the friction add is the cost of deciding them once per step; two more columns run with ρ∞ = 1 to show
-//! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 23.4 mm is 9.1 mm without the
-//! bounce, 12.7 mm with neither bounce nor friction and 6.5 mm with neither and no damping, but 19.2 mm
-//! with its own law and no damping: no one change brings it near 5 mm (all its cells are under 5.3 mm at
-//! 1/120 s). The Bunny stays at 33–63 mm in every cell (and moves 35 mm under the sensitivity study's
-//! perturbation). The table's outliers (31.5 mm at 1/240 s with its own law, 21.3 mm at 1/120 s with
-//! e = 0, against 2–6 mm in the other cells) are one pattern: a quadrant of the cloth (two opposite ones
-//! at 1/240 s, one at 1/120 s) ends 45 mm off just below the table's rim and 85 mm off at its corner, the
-//! rest within 5 mm. Friction near its limit there makes the drape bistable per quadrant, and which way a
-//! quadrant goes flips with details far from the step's accuracy: at 1/240 s, allowing 16 regime changes
-//! per contact and step instead of 4 brought it to 0.7 mm from the thesis's run, and 20 Newton
-//! iterations on top of that took it to 31.0 mm again (tried, not kept).
+//! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 16.4 mm is 9.1 mm without the
+//! bounce, 12.7 mm with neither bounce nor friction and 6.5 mm with neither and no damping, but 17.6 mm
+//! with its own law and no damping: no one change brings it near 5 mm (at 1/120 s its cells are 1.6–8.4
+//! mm). The Bunny stays at 21–63 mm in every cell (and moves 35 mm under the sensitivity study's
+//! perturbation). The table's outliers are friction near its limit: at 1/120 s with e = 0 (21.3 mm) one
+//! quadrant of the cloth ends 45 mm off just below the table's rim and 85 mm off at its corner, the rest
+//! within 5 mm; undamped at 1/60 s (31.1 mm) two opposite quadrants slip 30–35 mm on the table's top.
+//! Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
+//! the end of the step (before it moved to the time of impact) the table at 1/240 s had two quadrants
+//! off (31.5 mm); allowing 16 regime changes per contact and step instead of 4 brought that run to
+//! 0.7 mm from the thesis's, and 20 Newton iterations on top of that took it to 31.0 mm again (tried,
+//! not kept).
 
 use std::fmt::Write as _;
 use std::ops::ControlFlow;

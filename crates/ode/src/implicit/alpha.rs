@@ -48,7 +48,7 @@ use crate::Coord;
 use crate::stepper::{OdeError, State, StepStats};
 
 use super::Linearized;
-use super::contact::{ContactModel, Regime};
+use super::contact::{ContactModel, Regime, StepStart};
 use super::system::Filter;
 use super::workspace::ImplicitWorkspace;
 
@@ -273,7 +273,14 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 self.contact.found.clear();
                 model.contacts(&now.x, &next.x, &mut self.contact.found);
                 self.contact.merge(prescribed);
-                regimes_changed = self.contact.update(&next.v, &self.xk, c.end, &now.v, &self.b, c.eta);
+                regimes_changed = self.contact.update(
+                    &next.v,
+                    &self.xk,
+                    c.end,
+                    StepStart { x: &now.x, v: &now.v, h },
+                    &self.b,
+                    c.eta,
+                );
                 for s in &self.contact.slots {
                     let i = s.contact.coordinate as usize;
                     self.b[i] += s.friction * c.eta;
@@ -402,8 +409,9 @@ impl<C: Coord> ImplicitWorkspace<C> {
         }
         // Along a constrained direction the motion is the contact's: the acceleration there would carry an
         // impact into the next step. A coordinate in contact ends on its surface's tangent plane (the
-        // position bound), and leaves the step with the normal velocity of an inelastic impact, zero (or
-        // its restitution's bounce): x₁ = X₁ + c w alone cannot express that. The w that put it on the
+        // position bound; or, arriving with a restitution, as far out as its bounce took it since the
+        // impact), and leaves the step with the normal velocity of an inelastic impact, zero (or its
+        // restitution's bounce): x₁ = X₁ + c w alone cannot express that. The w that put it on the
         // plane points out of the surface by as much as the inertial part X₁ of the step went in (for
         // ρ∞ = 0.4, 82 % of the speed it arrived with), and kept as the velocity it is a bounce that
         // pumps energy into the cloth (measured: a 20 m/s drop onto a box went from 43 J to 300 J).
