@@ -29,12 +29,14 @@
 //! A last table repeats the references and generalised-α at 1/60–1/240 s with gravity scaled by
 //! 1 + 10⁻⁹ ([`PERTURBED_GRAVITY`]): how far a run moves under a change that small is the part of its
 //! error that no step size controls. Measured: the thesis's RK4 moves 0.01 mm on every drape, and
-//! generalised-α with contact after the step 0.00 mm; with contact in the solve at 1/60 s the Bunny
-//! moves 35 mm (11 mm with μ = 0, 11–13 mm with 2, 5 or 8 Newton iterations), so discrete contact
-//! decisions, not friction alone, amplify it; the table and the sphere move 2–3 mm. Hysteresis in
-//! those decisions moves the sensitivity rather than removing it (tried, not kept): releasing a contact
-//! only once it pulls with 5 % of its reaction took the Bunny's to 2.1 mm and the table's to 21 mm, and
-//! activating one only past a small violation left the Bunny's at 36 mm and took the table's to 21 mm.
+//! generalised-α with contact after the step 0.00 mm. With contact in the solve the converged Bunny
+//! itself moves 7.4 mm (the table and the sphere 0.1 and 0.4 mm), and at 1/60 s the Bunny moves 17.8 mm,
+//! the sphere 8.2 mm and the table 4.3 mm: discrete contact decisions amplify it. Before the bounce
+//! moved to the time of impact the Bunny at 1/60 s moved 35 mm (11 mm with μ = 0, 11–13 mm with 2, 5 or
+//! 8 Newton iterations, so not friction alone), and hysteresis in those decisions moved the sensitivity
+//! rather than removing it (tried, not kept): releasing a contact only once it pulls with 5 % of its
+//! reaction took the Bunny's to 2.1 mm and the table's to 21 mm, and activating one only past a small
+//! violation left the Bunny's at 36 mm and took the table's to 21 mm.
 //!
 //! A last table takes the in-solve error at 1/60–1/240 s apart by contact law: the run and its converged
 //! reference again with no bounce (e = 0), no friction (μ = 0) or neither. What is left with neither is
@@ -42,11 +44,12 @@
 //! the friction add is the cost of deciding them once per step; two more columns run with ρ∞ = 1 to show
 //! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 16.4 mm is 9.1 mm without the
 //! bounce, 12.7 mm with neither bounce nor friction and 6.5 mm with neither and no damping, but 17.6 mm
-//! with its own law and no damping: no one change brings it near 5 mm (at 1/120 s its cells are 1.6–8.4
-//! mm). The Bunny stays at 21–63 mm in every cell (and moves 35 mm under the sensitivity study's
-//! perturbation). The table's outliers are friction near its limit: at 1/120 s with e = 0 (21.3 mm) one
-//! quadrant of the cloth ends 45 mm off just below the table's rim and 85 mm off at its corner, the rest
-//! within 5 mm; undamped at 1/60 s (31.1 mm) two opposite quadrants slip 30–35 mm on the table's top.
+//! with its own law and no damping: no one change brings it near 5 mm (at 1/120 s its cells are
+//! 1.6–8.4 mm). The Bunny stays at 21–63 mm in every cell (and moves 17.8 mm at 1/60 s under the
+//! sensitivity study's perturbation). The table's outliers are friction near its limit: at 1/120 s
+//! with e = 0 (21.3 mm) one quadrant of the cloth ends 45 mm off just below the table's rim and 85 mm
+//! off at its corner, the rest within 5 mm; undamped at 1/60 s (31.1 mm) two opposite quadrants slip
+//! 30–35 mm on the table's top.
 //! Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
 //! the end of the step (before it moved to the time of impact) the table at 1/240 s had two quadrants
 //! off (31.5 mm); allowing 16 regime changes per contact and step instead of 4 brought that run to
