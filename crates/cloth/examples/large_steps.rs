@@ -738,9 +738,9 @@ fn drapes_section() -> Result<(), Error> {
 }
 
 /// One generalised-α drape with contact in the solve, set from the environment (`DRAPE` = bunny |
-/// table | sphere, `DT`, `NEWTON`, `RHO`; `E` and `MU` change the scene's restitution and friction):
-/// its error at each snapshot time against both references;
-/// with `POINTS` set, first each material point's distance from the faithful run at the last snapshot
+/// table | sphere, `DT`, `NEWTON`, `RHO`; `E` and `MU` change the scene's restitution and friction,
+/// for the run and the converged reference; the thesis's run keeps the scene's own): its error at
+/// each snapshot time against both references; with `POINTS` set, first each material point's distance from the faithful run at the last snapshot
 /// (mm, with the faithful position); with `TRACE` = a particle's index, first its position in the run
 /// and in both references at each snapshot. `TIMES` (comma-separated seconds, on the step's grid)
 /// replaces the thesis's snapshot times, both references then run afresh.
@@ -750,9 +750,25 @@ fn drape_probe_section() -> Result<(), Error> {
     let d = DRAPES.iter().find(|d| d.slug == slug).ok_or_else(|| format!("no drape `{slug}`"))?;
     // `TIMES` (comma-separated seconds) compares at other times than the thesis's snapshots; both
     // references are then run afresh.
-    let times: Option<Vec<f64>> =
-        std::env::var("TIMES").ok().map(|s| s.split(',').filter_map(|t| t.trim().parse().ok()).collect());
+    let times: Option<Vec<f64>> = match std::env::var("TIMES") {
+        Ok(s) => Some(
+            s.split(',')
+                .map(|t| {
+                    t.trim()
+                        .parse::<f64>()
+                        .map_err(|e| format!("TIMES: `{}` is not a time in seconds: {e}", t.trim()))
+                })
+                .collect::<Result<_, _>>()?,
+        ),
+        Err(_) => None,
+    };
     let snaps = times.clone().unwrap_or_else(|| d.snapshots.to_vec());
+    // The fine drapes' 17 × 17 particles.
+    let trace = match env("TRACE") {
+        Some(k) if k >= 0.0 && k.fract() == 0.0 && k < (17 * 17) as f64 => Some(k as usize),
+        Some(k) => return Err(format!("TRACE: {k} is not a particle index (0 to {})", 17 * 17 - 1).into()),
+        None => None,
+    };
     let (mut scene, meshes) = load_drape(d)?;
     let faithful_ref = if times.is_some() {
         run_drape(&scene, &meshes, &faithful(), &snaps, false)?.snapshots
@@ -792,8 +808,7 @@ fn drape_probe_section() -> Result<(), Error> {
             .collect::<Vec<_>>()
             .join(" ")
     };
-    if let Some(k) = env("TRACE") {
-        let k = k as usize;
+    if let Some(k) = trace {
         for ((t, a), (b, f)) in snaps.iter().zip(&out.snapshots).zip(converged_ref.iter().zip(&faithful_ref))
         {
             println!("t {t:.4}: {:+.4?} converged {:+.4?} thesis {:+.4?}", a[k], b[k], f[k]);

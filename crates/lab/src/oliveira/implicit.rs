@@ -26,7 +26,7 @@
 //! times. Every step of every fixed-step run is checked for particles inside an object. Both references
 //! are cached under `target/anima-lab/`.
 //!
-//! A last table repeats the references and generalised-α at 1/60–1/240 s with gravity scaled by
+//! Another table repeats the references and generalised-α at 1/60–1/240 s with gravity scaled by
 //! 1 + 10⁻⁹ ([`PERTURBED_GRAVITY`]): how far a run moves under a change that small is the part of its
 //! error that no step size controls. Measured: the thesis's RK4 moves 0.01 mm on every drape, and
 //! generalised-α with contact after the step 0.00 mm. With contact in the solve the converged Bunny
@@ -49,8 +49,7 @@
 //! sensitivity study's perturbation). The table's outliers are friction near its limit: at 1/120 s
 //! with e = 0 (21.3 mm) one quadrant of the cloth ends 45 mm off just below the table's rim and 85 mm
 //! off at its corner, the rest within 5 mm; undamped at 1/60 s (31.1 mm) two opposite quadrants slip
-//! 30–35 mm on the table's top.
-//! Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
+//! 30–35 mm on the table's top. Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
 //! the end of the step (before it moved to the time of impact) the table at 1/240 s had two quadrants
 //! off (31.5 mm); allowing 16 regime changes per contact and step instead of 4 brought that run to
 //! 0.7 mm from the thesis's, and 20 Newton iterations on top of that took it to 31.0 mm again (tried,
@@ -462,8 +461,9 @@ pub fn reproduce(repo: &Repo) -> Result<()> {
          every object), each against the same law run to convergence (its own reference at 1/16 000 s with 8 \
          Newton iterations, recomputed for each law). The error left with e = 0 and μ = 0 is the integrator's \
          on the cloth's own motion plus where contacts are found; what the bounce or the friction add on top \
-         is theirs: decisions (bounce on arrival, stick or slide) taken once per step, from the velocity at \
-         the start of the step, where the converged run takes them at the moment of each impact. The last \
+         is theirs: the bounce's speed and the choice between sticking and sliding are taken once per step, \
+         from the velocity at the start of the step (the bounce is placed at its time of impact), where the \
+         converged run takes them at the moment of each impact. The last \
          two columns repeat the first and the fourth with ρ∞ = 1 (no numerical damping, against the default \
          0.2): the part of the error that is generalised-α's damping of the cloth's own motion.\n\n\
          | drape | step | scene's law | e = 0 | μ = 0 | e = 0, μ = 0 | scene's law, ρ∞ = 1 | e = 0, μ = 0, ρ∞ = 1 |\n\
@@ -535,13 +535,12 @@ fn attribution_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> R
         for &(law, rho_inf) in &columns {
             let ((_, inelastic, frictionless), reference) = (LAWS[law], &converged[law]);
             let m = Method { inelastic, frictionless, rho_inf, ..Method::in_solve(1.0 / per_s) };
-            let run_here = || -> Result<Outcome> {
-                eprintln!("anima-lab: {} — {} at {}", d.short_title, m.label(), m.step_label());
-                run(repo, d, &m)
-            };
             let outcome = match rows.iter().find(|r| r.method == m) {
                 Some(Row { outcome: Some(o), .. }) => o.clone(),
-                _ => run_here()?,
+                _ => {
+                    eprintln!("anima-lab: {} — {} at {}", d.short_title, m.label(), m.step_label());
+                    run(repo, d, &m)?
+                }
             };
             let _ = write!(out, " {:.1} mm |", worst_rms(&outcome.snapshots, &reference.snapshots) * 1e3);
         }
