@@ -41,6 +41,7 @@
 //! assert!((middle.z - (centre.z + radius)).abs() < 0.02);
 //! ```
 
+mod assembly;
 pub mod contact_mode;
 pub mod flex3d;
 pub mod membrane;

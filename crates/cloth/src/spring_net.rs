@@ -6,9 +6,10 @@
 //! f_i = (k (L − L0) + c (v_j − v_i)·n) n, f_j = −f_i (k in N/m, c in N·s/m).
 
 use anima_geom::DVec3;
-use anima_ode::{Jacobians, Linearized, OdeSystem, SpringBlock};
+use anima_ode::{Jacobians, Linearized, OdeSystem, SystemOut};
 use glam::DMat3;
 
+use crate::assembly::{SpringAssembly, SpringTerm};
 use crate::sheet_stencil::{GridStencil, Particles, StencilClass};
 
 /// What a spring stands for in a sheet; only used for counting and reporting.
@@ -50,6 +51,10 @@ pub struct SpringNetwork {
     /// Evaluate the stencil rows on all cores (with the `parallel` feature); the result is
     /// bit-identical to the serial one.
     pub parallel: bool,
+    /// Each spring's ends as it is oriented (its force acts on `.0`), and the implicit assembly that
+    /// shares the springs out over the threads.
+    ends: Vec<(u32, u32)>,
+    assembly: SpringAssembly,
 }
 
 /// Why a network was refused.
@@ -93,7 +98,10 @@ impl SpringNetwork {
             }
         }
         let pattern = springs.iter().map(|s| (s.i.min(s.j), s.i.max(s.j))).collect();
+        let ends = springs.iter().map(|s| (s.i, s.j)).collect();
         Ok(Self {
+            ends,
+            assembly: SpringAssembly::default(),
             inv_masses: masses.iter().map(|m| 1.0 / m).collect(),
             masses,
             pinned,
@@ -282,55 +290,40 @@ impl Linearized<DVec3> for SpringNetwork {
         v: &[DVec3],
         beta_v: f64,
         beta_x: f64,
-        f: &mut [DVec3],
-        diag: &mut [DMat3],
-        off: &mut [DMat3],
-        mut springs: Option<&mut Vec<SpringBlock<DVec3>>>,
+        out: SystemOut<'_, DVec3>,
         _scratch: &mut Jacobians<DVec3>,
     ) {
-        for (fi, m) in f.iter_mut().zip(&self.masses) {
-            *fi = self.gravity * *m;
-        }
-        diag.fill(DMat3::ZERO);
-        let blocks = !off.is_empty();
-        if let Some(list) = springs.as_deref_mut() {
-            list.clear();
-        }
-        for (e, s) in self.springs.iter().enumerate() {
-            let (i, j) = (s.i as usize, s.j as usize);
-            let d = x[j] - x[i];
-            let l = d.length();
-            if blocks {
-                off[e] = DMat3::ZERO;
-            }
-            if l == 0.0 {
-                if let Some(list) = springs.as_deref_mut() {
-                    list.push(SpringBlock { i: s.i, j: s.j, u: DVec3::ZERO, a: 0.0 });
+        let SystemOut { f, diag, off, springs, .. } = out;
+        let (list, masses, gravity, definite) =
+            (&self.springs, &self.masses, self.gravity, self.definite_jacobians);
+        self.assembly.force_and_system(
+            &self.ends,
+            |i| gravity * masses[i],
+            |e| {
+                let s = &list[e];
+                let (i, j) = (s.i as usize, s.j as usize);
+                let d = x[j] - x[i];
+                let l = d.length();
+                if l == 0.0 {
+                    return SpringTerm::default();
                 }
-                continue;
-            }
-            let n = d / l;
-            let fs = spring_pull(s, n, l, v[i], v[j]);
-            f[i] += fs;
-            f[j] -= fs;
-            let mut g = 1.0 - s.rest_length / l;
-            if self.definite_jacobians {
-                g = g.max(0.0);
-            }
-            let along = beta_x * s.stiffness * (1.0 - g) + beta_v * s.damping;
-            let across = beta_x * s.stiffness * g;
-            let block = DMat3::from_cols(n * (n.x * along), n * (n.y * along), n * (n.z * along))
-                + DMat3::from_diagonal(DVec3::splat(across));
-            if blocks {
-                off[e] = -block;
-            }
-            diag[i] += block;
-            diag[j] += block;
-            if let Some(list) = springs.as_deref_mut() {
-                // B = u uᵀ + a I with u = n √along (along ≥ 0: 1 − g = L0/L and the damping ≥ 0).
-                list.push(SpringBlock { i: s.i, j: s.j, u: n * along.sqrt(), a: across });
-            }
-        }
+                let n = d / l;
+                let force = spring_pull(s, n, l, v[i], v[j]);
+                let mut g = 1.0 - s.rest_length / l;
+                if definite {
+                    g = g.max(0.0);
+                }
+                // B = along n nᵀ + across I; in spring form u = n √along (along ≥ 0: 1 − g = L0/L and
+                // the damping ≥ 0).
+                let along = beta_x * s.stiffness * (1.0 - g) + beta_v * s.damping;
+                let across = beta_x * s.stiffness * g;
+                SpringTerm { n, along, across, force, live: true }
+            },
+            f,
+            diag,
+            off,
+            springs,
+        );
     }
 
     /// Every pair block is one spring's, B = (β_x k (1 − g) + β_v c) n nᵀ + β_x k g I.
@@ -341,10 +334,26 @@ impl Linearized<DVec3> for SpringNetwork {
     /// The force of [`Linearized::force_and_system`] without the blocks, summed in its order (the same
     /// bits).
     fn force(&mut self, _t: f64, x: &[DVec3], v: &[DVec3], f: &mut [DVec3], _scratch: &mut Jacobians<DVec3>) {
-        for (fi, m) in f.iter_mut().zip(&self.masses) {
-            *fi = self.gravity * *m;
-        }
-        self.add_forces_by_spring(x, v, f);
+        let (list, masses, gravity) = (&self.springs, &self.masses, self.gravity);
+        self.assembly.forces(
+            &self.ends,
+            |i| gravity * masses[i],
+            |e| {
+                let s = &list[e];
+                let (i, j) = (s.i as usize, s.j as usize);
+                let d = x[j] - x[i];
+                let l = d.length();
+                if l == 0.0 {
+                    return SpringTerm::default();
+                }
+                SpringTerm {
+                    force: spring_pull(s, d / l, l, v[i], v[j]),
+                    live: true,
+                    ..SpringTerm::default()
+                }
+            },
+            f,
+        );
     }
 
     fn prescribed(&self) -> &[bool] {
@@ -629,7 +638,8 @@ mod system_tests {
         let (mut f1, mut f2) = (vec![DVec3::ZERO; 25], vec![DVec3::ZERO; 25]);
         let (mut d1, mut o1) = (vec![DMat3::ZERO; 25], vec![DMat3::ZERO; pairs]);
         let mut scratch = Jacobians::new(25, pairs);
-        net.force_and_system(0.0, &x, &v, bv, bx, &mut f1, &mut d1, &mut o1, None, &mut scratch);
+        let out = SystemOut { f: &mut f1, diag: &mut d1, off: &mut o1, springs: None, stencils: None };
+        net.force_and_system(0.0, &x, &v, bv, bx, out, &mut scratch);
         let mut jac = Jacobians::new(25, pairs);
         net.force_and_jacobians(0.0, &x, &v, &mut f2, &mut jac);
         for i in 0..25 {

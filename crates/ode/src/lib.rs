@@ -61,6 +61,7 @@ mod control;
 mod coord;
 mod implicit;
 mod integrator;
+pub mod parallel;
 pub mod stability;
 mod stepper;
 
@@ -71,7 +72,7 @@ pub use implicit::alpha::{
 };
 pub use implicit::contact;
 pub use implicit::workspace::SolveProfile;
-pub use implicit::{Jacobians, LinearSolver, Linearized, SpringBlock};
+pub use implicit::{Jacobians, LinearSolver, Linearized, SpringBlock, SystemOut};
 pub use integrator::{Integrator, ParseIntegratorError};
 pub use stepper::{OdeError, State, StepStats, Stepper};
 

@@ -1308,7 +1308,7 @@ mod tests {
             .collect();
         let v: Vec<DVec3> = x.iter().map(|p| DVec3::new(p.y, -p.x, 0.3)).collect();
         cloth.set_state(&x, &v);
-        let model = cloth.model();
+        let mut model = cloth.model().clone();
         let mut f = vec![DVec3::ZERO; x.len()];
         model.forces(&x, &v, &mut f);
         let rest: Vec<DVec3> = cloth.mesh().rest().iter().map(|p| p.extend(0.0)).collect();

@@ -30,6 +30,7 @@
 )]
 
 use crate::Coord;
+use crate::parallel;
 
 use super::cg::Preconditioner;
 use super::cholesky::SparseSolver;
@@ -71,6 +72,15 @@ pub(crate) struct RigidAggregation<C: Coord> {
     fixed: Vec<bool>,
     /// Aggregate of each coordinate (`NONE` for prescribed ones).
     agg: Vec<u32>,
+    /// The coordinates of aggregate g, increasing: `members[member_start[g]..member_start[g + 1]]`.
+    members: Vec<u32>,
+    member_start: Vec<u32>,
+    /// Per aggregate g, (h, coarse pair) for its pairs with h > g, sorted by h:
+    /// `adjacent[adjacent_start[g]..adjacent_start[g + 1]]`.
+    adjacent: Vec<(u32, u32)>,
+    adjacent_start: Vec<u32>,
+    /// Rᵀ r per aggregate (the restriction, before it is laid out for the coarse solve).
+    restricted: Vec<[f64; MAX_PER]>,
     n_agg: usize,
     /// Coarse unknowns per aggregate: 6 for 3-D coordinates, 1 for scalars.
     per: usize,
@@ -93,6 +103,11 @@ pub(crate) struct RigidAggregation<C: Coord> {
     /// Per coordinate, Σ B_e over its springs to other aggregates (scratch of the spring-form Galerkin
     /// product, symmetric: xx, yy, zz, xy, xz, yz).
     across: Vec<[f64; 6]>,
+    /// Per coordinate, the solve's projector S_i onto its free directions when it is not the identity
+    /// (a contact constrains it), and whether it is: the coarse matrix is (S R)ᵀ A (S R), the Galerkin
+    /// matrix of the filtered system the solve sees.
+    projector: Vec<[[f64; 3]; 3]>,
+    projected: Vec<bool>,
     /// Coarse factorisations so far.
     pub factorizations: usize,
 }
@@ -167,6 +182,14 @@ fn galerkin3(li: [f64; 3], b: &[[f64; 3]; 3], lj: [f64; 3]) -> Block6 {
     out
 }
 
+/// A B for 3 × 3 matrices.
+#[inline]
+fn mat3_mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|r| {
+        std::array::from_fn(|c| a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c])
+    })
+}
+
 /// out += Rᵀ B R for one coordinate's R = [S(l) | I] and a symmetric B.
 #[inline]
 fn add_galerkin_block(out: &mut Block6, l: [f64; 3], b: &[[f64; 3]; 3]) {
@@ -202,6 +225,11 @@ impl<C: Coord> RigidAggregation<C> {
             pattern: Vec::new(),
             fixed: Vec::new(),
             agg: Vec::new(),
+            members: Vec::new(),
+            member_start: Vec::new(),
+            restricted: Vec::new(),
+            adjacent: Vec::new(),
+            adjacent_start: Vec::new(),
             n_agg: 0,
             per: 0,
             lever: Vec::new(),
@@ -217,8 +245,32 @@ impl<C: Coord> RigidAggregation<C> {
             az: Vec::new(),
             centres: Vec::new(),
             across: Vec::new(),
+            projector: Vec::new(),
+            projected: Vec::new(),
             factorizations: 0,
         }
+    }
+
+    /// Whether `filter` constrains other coordinates or directions than the filter the coarse matrix
+    /// was built with: its Galerkin matrix (S R)ᵀ A (S R) is then not the solve's, and a coarse level
+    /// that misses a direction the solve has freed over-corrects it.
+    pub fn filter_changed(&self, filter: Filter<'_, C>) -> bool {
+        let Filter::Projected(blocks) = filter else {
+            return self.projected.iter().any(|&p| p);
+        };
+        if blocks.len() != self.projected.len() {
+            return true;
+        }
+        let identity = C::block_identity(1.0);
+        blocks.iter().enumerate().any(|(i, &b)| {
+            let entry =
+                |r: usize, c: usize| if r < C::DIM && c < C::DIM { C::block_entry(b, r, c) } else { 0.0 };
+            if self.projected[i] {
+                (0..3).any(|r| (0..3).any(|c| entry(r, c) != self.projector[i][r][c]))
+            } else {
+                (0..C::DIM).any(|r| (0..C::DIM).any(|c| entry(r, c) != C::block_entry(identity, r, c)))
+            }
+        })
     }
 
     /// Whether a coarse matrix has been factorised.
@@ -278,6 +330,26 @@ impl<C: Coord> RigidAggregation<C> {
             count += 1;
         }
         self.n_agg = count as usize;
+        // Members of each aggregate in increasing order, for the restriction's per-aggregate sums.
+        self.member_start.clear();
+        self.member_start.resize(self.n_agg + 1, 0);
+        for &g in &self.agg {
+            if g != NONE {
+                self.member_start[g as usize + 1] += 1;
+            }
+        }
+        for g in 0..self.n_agg {
+            self.member_start[g + 1] += self.member_start[g];
+        }
+        let mut fill: Vec<u32> = self.member_start[..self.n_agg].to_vec();
+        self.members.clear();
+        self.members.resize(self.member_start[self.n_agg] as usize, 0);
+        for (i, &g) in self.agg.iter().enumerate() {
+            if g != NONE {
+                self.members[fill[g as usize] as usize] = i as u32;
+                fill[g as usize] += 1;
+            }
+        }
         // Coarse pairs in order of first appearance.
         let mut index = std::collections::HashMap::new();
         let mut pairs: Vec<(u32, u32)> = Vec::new();
@@ -299,6 +371,27 @@ impl<C: Coord> RigidAggregation<C> {
             self.flip.push(gi > gj);
         }
         self.n_pairs = pairs.len();
+        // Per aggregate, its coarse pairs with higher aggregates sorted by the other aggregate, for the
+        // rank-one stencils' couplings.
+        self.adjacent_start.clear();
+        self.adjacent_start.resize(self.n_agg + 1, 0);
+        for &(gi, _) in &pairs {
+            self.adjacent_start[gi as usize + 1] += 1;
+        }
+        for g in 0..self.n_agg {
+            self.adjacent_start[g + 1] += self.adjacent_start[g];
+        }
+        self.adjacent.clear();
+        self.adjacent.resize(pairs.len(), (0, 0));
+        let mut fill: Vec<u32> = self.adjacent_start[..self.n_agg].to_vec();
+        for (e, &(gi, gj)) in pairs.iter().enumerate() {
+            self.adjacent[fill[gi as usize] as usize] = (gj, e as u32);
+            fill[gi as usize] += 1;
+        }
+        for g in 0..self.n_agg {
+            self.adjacent[self.adjacent_start[g] as usize..self.adjacent_start[g + 1] as usize]
+                .sort_unstable();
+        }
         // The scalar pattern: inside each aggregate (upper triangle), then every coarse pair.
         let mut scalar = Vec::with_capacity(self.n_agg * per * (per - 1) / 2 + pairs.len() * per * per);
         for g in 0..self.n_agg {
@@ -350,12 +443,37 @@ impl<C: Coord> RigidAggregation<C> {
         masses: &[f64],
         prescribed: &[bool],
         x: &[C],
+        filter: Filter<'_, C>,
     ) -> Result<(), String> {
         let n = masses.len();
         if self.solver.is_none() || self.pattern != pattern || self.fixed != prescribed {
             self.aggregate(pattern, prescribed)?;
         }
+        // In spring form the diagonal's scalar part (the mass, and what the system adds to it) is what
+        // the coarse level weighs, and the levers are taken about its centres.
+        let masses = if a.spring_form { &a.masses[..] } else { masses };
         let per = self.per;
+        // The projectors of the coordinates the filter constrains (prescribed ones are in no aggregate).
+        self.projected.clear();
+        self.projected.resize(n, false);
+        self.projector.resize(n, [[0.0; 3]; 3]);
+        if let Filter::Projected(blocks) = filter {
+            let identity = C::block_identity(1.0);
+            for i in 0..n {
+                let b = blocks[i];
+                let entries: [[f64; 3]; 3] = std::array::from_fn(|r| {
+                    std::array::from_fn(
+                        |c| if r < C::DIM && c < C::DIM { C::block_entry(b, r, c) } else { 0.0 },
+                    )
+                });
+                let same =
+                    (0..C::DIM).all(|r| (0..C::DIM).all(|c| C::block_entry(identity, r, c) == entries[r][c]));
+                if !same {
+                    self.projected[i] = true;
+                    self.projector[i] = entries;
+                }
+            }
+        }
         // Levers from the aggregates' mass centres.
         if per == MAX_PER {
             let centre = &mut self.centres;
@@ -392,13 +510,26 @@ impl<C: Coord> RigidAggregation<C> {
         self.factorize_coarse()
     }
 
-    /// Rᵀ A R from A's blocks: Rᵢᵀ A_ii Rᵢ for every coordinate, Rᵢᵀ A_ij R_j for every pair.
+    /// S B S' as a block, for the projectors of coordinates `i` and `j` (identity where not projected).
+    fn projected_block(&self, i: usize, b: C::Block, j: usize) -> C::Block {
+        let mut b = b;
+        if self.projected[i] {
+            b = C::block_mul_blocks(C::block_from_entries(self.projector[i]), b);
+        }
+        if self.projected[j] {
+            b = C::block_mul_blocks(b, C::block_from_entries(self.projector[j]));
+        }
+        b
+    }
+
+    /// Rᵀ A R from A's blocks: Rᵢᵀ A_ii Rᵢ for every coordinate, Rᵢᵀ A_ij R_j for every pair (each with
+    /// its coordinates' projectors).
     fn galerkin_blocks(&mut self, a: &SystemMatrix<C>, pattern: &[(u32, u32)]) {
         let (n, per) = (a.diag.len(), self.per);
         for i in 0..n {
             let g = self.agg[i];
             if g != NONE {
-                let m = self.galerkin(i, a.diag[i], i);
+                let m = self.galerkin(i, self.projected_block(i, a.diag[i], i), i);
                 let d = &mut self.d_blocks[g as usize];
                 for p in 0..per {
                     for q in 0..per {
@@ -413,7 +544,7 @@ impl<C: Coord> RigidAggregation<C> {
             if gi == NONE || gj == NONE {
                 continue;
             }
-            let m = self.galerkin(i, a.off[e], j);
+            let m = self.galerkin(i, self.projected_block(i, a.off[e], j), j);
             if gi == gj {
                 // A_ij and A_ji = A_ijᵀ both fall inside the aggregate.
                 let d = &mut self.d_blocks[gi as usize];
@@ -441,6 +572,52 @@ impl<C: Coord> RigidAggregation<C> {
         }
     }
 
+    /// The contribution of spring `e` = (i, j) with B = u uᵀ + s I when a contact projects i or j
+    /// (3-D): (Sᵢ Rᵢ − S_j R_j)ᵀ B (Sᵢ Rᵢ − S_j R_j) inside one aggregate; Rᵢᵀ Sᵢ B Sᵢ Rᵢ and
+    /// R_jᵀ S_j B S_j R_j on the diagonals and −Rᵢᵀ Sᵢ B S_j R_j between two.
+    fn add_projected_spring(&mut self, e: usize, i: usize, j: usize, u: [f64; 3], s: f64) {
+        let b: [[f64; 3]; 3] =
+            std::array::from_fn(|r| std::array::from_fn(|c| u[r] * u[c] + if r == c { s } else { 0.0 }));
+        let identity: [[f64; 3]; 3] =
+            std::array::from_fn(|r| std::array::from_fn(|c| if r == c { 1.0 } else { 0.0 }));
+        let si = if self.projected[i] { self.projector[i] } else { identity };
+        let sj = if self.projected[j] { self.projector[j] } else { identity };
+        let b_ii = mat3_mul(&mat3_mul(&si, &b), &si);
+        let b_jj = mat3_mul(&mat3_mul(&sj, &b), &sj);
+        let b_ij = mat3_mul(&mat3_mul(&si, &b), &sj);
+        let (gi, gj) = (self.agg[i], self.agg[j]);
+        let (li, lj) = (self.lever[i], self.lever[j]);
+        if gi != NONE {
+            add_galerkin_block(&mut self.d_blocks[gi as usize], li, &b_ii);
+        }
+        if gj != NONE {
+            add_galerkin_block(&mut self.d_blocks[gj as usize], lj, &b_jj);
+        }
+        if gi == NONE || gj == NONE {
+            return;
+        }
+        let m = galerkin3(li, &b_ij, lj);
+        if gi == gj {
+            let d = &mut self.d_blocks[gi as usize];
+            for p in 0..MAX_PER {
+                for q in 0..MAX_PER {
+                    d[p][q] -= m[p][q] + m[q][p];
+                }
+            }
+        } else {
+            let o = &mut self.o_blocks[self.pair_of[e] as usize];
+            for p in 0..MAX_PER {
+                for q in 0..MAX_PER {
+                    if self.flip[e] {
+                        o[q][p] -= m[p][q];
+                    } else {
+                        o[p][q] -= m[p][q];
+                    }
+                }
+            }
+        }
+    }
+
     /// Rᵀ A R from a spring-form A = M + Σ_e B_e (e_i − e_j)(e_i − e_j)ᵀ, B_e = u uᵀ + a I: the masses
     /// give m_i Rᵢᵀ Rᵢ; a spring inside one aggregate (Rᵢ − R_j)ᵀ B (Rᵢ − R_j), which moves only the
     /// rotations (Rᵢ − R_j = [S(x_i − x_j) | 0]); a spring between two aggregates Rᵢᵀ B Rᵢ and R_jᵀ B R_j
@@ -458,6 +635,21 @@ impl<C: Coord> RigidAggregation<C> {
         for (i, &m) in masses.iter().enumerate() {
             let g = self.agg[i];
             if g != NONE {
+                if self.projected[i] {
+                    // m Rᵢᵀ Sᵢ Rᵢ (a projector is idempotent), as m Rᵢᵀ (Sᵢ − I) Rᵢ on top of the
+                    // unconstrained term below: the closed form leaves out the rotation–translation
+                    // terms m S(lᵢ), which only cancel over the whole aggregate.
+                    if per == 1 {
+                        self.d_blocks[g as usize][0][0] += m * (self.projector[i][0][0] - 1.0);
+                    } else {
+                        let sm: [[f64; 3]; 3] = std::array::from_fn(|r| {
+                            std::array::from_fn(|c| {
+                                m * (self.projector[i][r][c] - if r == c { 1.0 } else { 0.0 })
+                            })
+                        });
+                        add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &sm);
+                    }
+                }
                 let d = &mut self.d_blocks[g as usize];
                 if per == 1 {
                     d[0][0] += m;
@@ -483,18 +675,30 @@ impl<C: Coord> RigidAggregation<C> {
             let (gi, gj) = (self.agg[i], self.agg[j]);
             let u = comps(u);
             if per == 1 {
+                // Scalar projectors are 0 or 1.
+                let (pi, pj) = (
+                    if self.projected[i] { self.projector[i][0][0] } else { 1.0 },
+                    if self.projected[j] { self.projector[j][0][0] } else { 1.0 },
+                );
+                let b = u[0] * u[0] + s;
                 if gi == gj {
+                    if gi != NONE && (pi != 1.0 || pj != 1.0) {
+                        self.d_blocks[gi as usize][0][0] += (pi - pj) * b * (pi - pj);
+                    }
                     continue;
                 }
-                let b = u[0] * u[0] + s;
-                for g in [gi, gj] {
+                for (g, p) in [(gi, pi), (gj, pj)] {
                     if g != NONE {
-                        self.d_blocks[g as usize][0][0] += b;
+                        self.d_blocks[g as usize][0][0] += p * b * p;
                     }
                 }
                 if gi != NONE && gj != NONE {
-                    self.o_blocks[self.pair_of[e] as usize][0][0] -= b;
+                    self.o_blocks[self.pair_of[e] as usize][0][0] -= pi * b * pj;
                 }
+                continue;
+            }
+            if self.projected[i] || self.projected[j] {
+                self.add_projected_spring(e, i, j, u, s);
                 continue;
             }
             if gi == gj {
@@ -535,14 +739,94 @@ impl<C: Coord> RigidAggregation<C> {
                 }
             }
         }
+        self.galerkin_stencils(a);
         if per == MAX_PER {
             for (i, c) in self.across.iter().enumerate() {
                 let g = self.agg[i];
                 if g == NONE || c.iter().all(|&v| v == 0.0) {
                     continue;
                 }
-                let b = [[c[0], c[3], c[4]], [c[3], c[1], c[5]], [c[4], c[5], c[2]]];
+                let mut b = [[c[0], c[3], c[4]], [c[3], c[1], c[5]], [c[4], c[5], c[2]]];
+                if self.projected[i] {
+                    let p = &self.projector[i];
+                    b = mat3_mul(&mat3_mul(p, &b), p);
+                }
                 add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &b);
+            }
+        }
+    }
+
+    /// The coarse pair of aggregates g < h.
+    fn coarse_pair(&self, g: u32, h: u32) -> Option<u32> {
+        let list = &self.adjacent
+            [self.adjacent_start[g as usize] as usize..self.adjacent_start[g as usize + 1] as usize];
+        list.binary_search_by_key(&h, |&(other, _)| other).ok().map(|k| list[k].1)
+    }
+
+    /// Rᵀ (w wᵀ) R of every rank-one stencil: per aggregate it touches, W_g = Σ Rᵢᵀ Sᵢ u_i over its
+    /// coordinates there, then W_g W_hᵀ on the blocks of each pair of those aggregates.
+    fn galerkin_stencils(&mut self, a: &SystemMatrix<C>) {
+        let per = self.per;
+        for (v, u) in a.stencil_vertices.iter().zip(&a.stencils) {
+            let mut groups: [(u32, [f64; MAX_PER]); 4] = [(NONE, [0.0; MAX_PER]); 4];
+            let mut count = 0;
+            for k in 0..4 {
+                let i = v[k] as usize;
+                let g = self.agg[i];
+                if g == NONE {
+                    continue;
+                }
+                let mut ui: [f64; 3] =
+                    std::array::from_fn(|c| if c < C::DIM { u[k].component(c) } else { 0.0 });
+                if self.projected[i] {
+                    let p = &self.projector[i];
+                    ui = std::array::from_fn(|r| p[r][0] * ui[0] + p[r][1] * ui[1] + p[r][2] * ui[2]);
+                }
+                let w = if per == 1 {
+                    let mut w = [0.0; MAX_PER];
+                    w[0] = ui[0];
+                    w
+                } else {
+                    modes_of(self.lever[i], ui)
+                };
+                let slot = match groups[..count].iter().position(|(h, _)| *h == g) {
+                    Some(s) => s,
+                    None => {
+                        groups[count].0 = g;
+                        count += 1;
+                        count - 1
+                    }
+                };
+                for c in 0..per {
+                    groups[slot].1[c] += w[c];
+                }
+            }
+            for p in 0..count {
+                let (g, wg) = groups[p];
+                let d = &mut self.d_blocks[g as usize];
+                for r in 0..per {
+                    for c in 0..per {
+                        d[r][c] += wg[r] * wg[c];
+                    }
+                }
+                for q in p + 1..count {
+                    let (h, wh) = groups[q];
+                    let (lo, hi, wl, wr) = if g < h { (g, h, wg, wh) } else { (h, g, wh, wg) };
+                    // Every pair of a stencil is a pattern pair, so its aggregates are a coarse pair.
+                    let Some(e) = self.coarse_pair(lo, hi) else {
+                        debug_assert!(
+                            false,
+                            "a rank-one stencil couples aggregates {lo} and {hi}, which no pattern pair does"
+                        );
+                        continue;
+                    };
+                    let o = &mut self.o_blocks[e as usize];
+                    for r in 0..per {
+                        for c in 0..per {
+                            o[r][c] += wl[r] * wr[c];
+                        }
+                    }
+                }
             }
         }
     }
@@ -577,48 +861,60 @@ impl<C: Coord> RigidAggregation<C> {
         Ok(())
     }
 
-    /// z += S R (Rᵀ A R)⁻¹ Rᵀ r (r already filtered).
+    /// z += S R (Rᵀ A R)⁻¹ Rᵀ r (r already filtered). The restriction sums each aggregate's members in
+    /// increasing order and the prolongation is per coordinate, so both run on every core with the
+    /// serial loop's bits.
     fn coarse(&mut self, filter: Filter<'_, C>, r: &[C], z: &mut [C]) {
         let per = self.per;
-        self.y.fill(0.0);
-        for i in 0..r.len() {
-            let g = self.agg[i];
-            if g == NONE {
-                continue;
+        self.restricted.resize(self.n_agg, [0.0; MAX_PER]);
+        let (members, start, lever) = (&self.members, &self.member_start, &self.lever);
+        parallel::for_chunks(&mut self.restricted, |s, out| {
+            for (k, y) in out.iter_mut().enumerate() {
+                let g = s + k;
+                *y = [0.0; MAX_PER];
+                for &i in &members[start[g] as usize..start[g + 1] as usize] {
+                    let i = i as usize;
+                    if per == 1 {
+                        y[0] += r[i].component(0);
+                    } else {
+                        let (d, ri) = (lever[i], [r[i].component(0), r[i].component(1), r[i].component(2)]);
+                        // Rotations: (e_k × d)·r = e_k·(d × r); translations: r.
+                        y[0] += d[1] * ri[2] - d[2] * ri[1];
+                        y[1] += d[2] * ri[0] - d[0] * ri[2];
+                        y[2] += d[0] * ri[1] - d[1] * ri[0];
+                        y[3] += ri[0];
+                        y[4] += ri[1];
+                        y[5] += ri[2];
+                    }
+                }
             }
-            let y = &mut self.y[g as usize * per..(g as usize + 1) * per];
-            if per == 1 {
-                y[0] += r[i].component(0);
-            } else {
-                let (d, ri) = (self.lever[i], [r[i].component(0), r[i].component(1), r[i].component(2)]);
-                // Rotations: (e_k × d)·r = e_k·(d × r); translations: r.
-                y[0] += d[1] * ri[2] - d[2] * ri[1];
-                y[1] += d[2] * ri[0] - d[0] * ri[2];
-                y[2] += d[0] * ri[1] - d[1] * ri[0];
-                y[3] += ri[0];
-                y[4] += ri[1];
-                y[5] += ri[2];
-            }
+        });
+        for (g, y) in self.restricted.iter().enumerate() {
+            self.y[g * per..(g + 1) * per].copy_from_slice(&y[..per]);
         }
         self.solver.as_mut().expect("updated before use").solve_in_place(&mut self.y, 1);
-        for i in 0..r.len() {
-            let g = self.agg[i];
-            if g == NONE {
-                continue;
+        let (agg, y) = (&self.agg, &self.y);
+        parallel::for_chunks(z, |s, z| {
+            for (k, z) in z.iter_mut().enumerate() {
+                let i = s + k;
+                let g = agg[i];
+                if g == NONE {
+                    continue;
+                }
+                let y = &y[g as usize * per..(g as usize + 1) * per];
+                let mut v = C::default();
+                if per == 1 {
+                    v.set_component(0, y[0]);
+                } else {
+                    // ω × d + t.
+                    let d = lever[i];
+                    v.set_component(0, y[1] * d[2] - y[2] * d[1] + y[3]);
+                    v.set_component(1, y[2] * d[0] - y[0] * d[2] + y[4]);
+                    v.set_component(2, y[0] * d[1] - y[1] * d[0] + y[5]);
+                }
+                *z += filter.one(i, v);
             }
-            let y = &self.y[g as usize * per..(g as usize + 1) * per];
-            let mut v = C::default();
-            if per == 1 {
-                v.set_component(0, y[0]);
-            } else {
-                // ω × d + t.
-                let d = self.lever[i];
-                v.set_component(0, y[1] * d[2] - y[2] * d[1] + y[3]);
-                v.set_component(1, y[2] * d[0] - y[0] * d[2] + y[4]);
-                v.set_component(2, y[0] * d[1] - y[1] * d[0] + y[5]);
-            }
-            z[i] += filter.one(i, v);
-        }
+        });
     }
 }
 
@@ -631,30 +927,36 @@ impl<C: Coord> Preconditioner<C> for RigidAggregation<C> {
         r: &[C],
         z: &mut [C],
     ) {
-        let n = r.len();
         let mut az = std::mem::take(&mut self.az);
+        // z += ω S J⁻¹ (r − A z), or z = ω S J⁻¹ r from z = 0 (`first`).
+        let smooth = |z: &mut [C], az: &[C], first: bool| {
+            parallel::for_chunks(z, |s, z| {
+                for (k, z) in z.iter_mut().enumerate() {
+                    let i = s + k;
+                    let residual = if first { r[i] } else { r[i] - az[i] };
+                    let step = filter.one(i, C::block_mul(a.jacobi[i], residual)) * SMOOTHING;
+                    *z = if first { step } else { *z + step };
+                }
+            });
+        };
         // Pre-smoothing (damped block Jacobi from z = 0).
-        for i in 0..n {
-            z[i] = filter.one(i, C::block_mul(a.jacobi[i], r[i])) * SMOOTHING;
-        }
+        smooth(z, &az, true);
         for _ in 1..self.sweeps {
             a.mul(pattern, filter, z, &mut az);
-            for i in 0..n {
-                z[i] += filter.one(i, C::block_mul(a.jacobi[i], r[i] - az[i])) * SMOOTHING;
-            }
+            smooth(z, &az, false);
         }
         // Coarse correction of the remaining residual.
         a.mul(pattern, filter, z, &mut az);
-        for i in 0..n {
-            az[i] = r[i] - az[i];
-        }
+        parallel::for_chunks(&mut az, |s, az| {
+            for (k, az) in az.iter_mut().enumerate() {
+                *az = r[s + k] - *az;
+            }
+        });
         self.coarse(filter, &az, z);
         // Post-smoothing.
         for _ in 0..self.sweeps {
             a.mul(pattern, filter, z, &mut az);
-            for i in 0..n {
-                z[i] += filter.one(i, C::block_mul(a.jacobi[i], r[i] - az[i])) * SMOOTHING;
-            }
+            smooth(z, &az, false);
         }
         self.az = az;
     }
@@ -695,7 +997,7 @@ mod tests {
         let masses: Vec<f64> = (0..n * n).map(|k| 1.0 + 0.5 * wobble(k, 2.1)).collect();
         let prescribed: Vec<bool> = (0..n * n).map(|k| k == 0).collect();
         let mut a = SystemMatrix::<DVec3>::new();
-        a.resize(n * n, pattern.len());
+        a.resize(n * n, &pattern, &[]);
         a.spring_form = true;
         a.springs.clear();
         for (e, &(i, j)) in pattern.iter().enumerate() {
@@ -707,7 +1009,7 @@ mod tests {
             a.diag[i as usize] = DVec3::block_combine(a.diag[i as usize], 1.0, b, 1.0);
             a.diag[j as usize] = DVec3::block_combine(a.diag[j as usize], 1.0, b, 1.0);
         }
-        a.add_masses(&masses);
+        a.add_masses(&masses, &vec![0.0; masses.len()]);
         (a, pattern, masses, prescribed, x)
     }
 
@@ -715,10 +1017,10 @@ mod tests {
     fn the_spring_form_galerkin_matrix_equals_the_block_one() {
         let (mut a, pattern, masses, prescribed, x) = spring_system();
         let mut from_springs = RigidAggregation::<DVec3>::new(1, 1);
-        from_springs.update(&a, &pattern, &masses, &prescribed, &x).unwrap();
+        from_springs.update(&a, &pattern, &masses, &prescribed, &x, Filter::None).unwrap();
         a.spring_form = false;
         let mut from_blocks = RigidAggregation::<DVec3>::new(1, 1);
-        from_blocks.update(&a, &pattern, &masses, &prescribed, &x).unwrap();
+        from_blocks.update(&a, &pattern, &masses, &prescribed, &x, Filter::None).unwrap();
         assert!(from_blocks.n_agg > 3 && from_blocks.n_pairs > 3, "aggregates {}", from_blocks.n_agg);
         let scale = from_blocks.s_diag.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let close = |p: &[f64], q: &[f64]| p.iter().zip(q).all(|(p, q)| (p - q).abs() <= 1e-12 * scale);
@@ -739,5 +1041,115 @@ mod tests {
         for (p, q) in y1.iter().zip(&y2) {
             assert!((*p - *q).length() < 1e-12 * (1.0 + q.length()), "{p} {q}");
         }
+    }
+
+    /// The coarse matrix equals (S R)ᵀ A (S R) computed column by column from products with A: with
+    /// springs, rank-one stencils, extra diagonal terms and contact projectors (a sliding and a sticking
+    /// coordinate).
+    #[test]
+    fn the_coarse_matrix_is_the_galerkin_product_of_the_filtered_system() {
+        for (with_stencils, with_projectors, extra) in [
+            (false, false, 0.0),
+            (false, false, 0.25),
+            (false, true, 0.0),
+            (true, false, 0.0),
+            (true, true, 0.25),
+        ] {
+            galerkin_case(with_stencils, with_projectors, extra);
+        }
+    }
+
+    fn galerkin_case(with_stencils: bool, with_projectors: bool, extra: f64) {
+        let (mut a, mut pattern, masses, prescribed, x) = spring_system();
+        let n = masses.len();
+        // Rank-one stencils over cells (every pair made a pattern pair), with zero springs on new pairs.
+        let stencils: Vec<[u32; 4]> =
+            if with_stencils { vec![[1, 7, 2, 8], [14, 21, 15, 20], [27, 33, 28, 34]] } else { vec![] };
+        for st in &stencils {
+            for a_ in 0..4 {
+                for b in a_ + 1..4 {
+                    let key = (st[a_].min(st[b]), st[a_].max(st[b]));
+                    if !pattern.contains(&key) {
+                        pattern.push(key);
+                        a.springs.push(super::super::SpringBlock {
+                            i: key.0,
+                            j: key.1,
+                            u: DVec3::ZERO,
+                            a: 0.0,
+                        });
+                    }
+                }
+            }
+        }
+        a.resize(n, &pattern, &stencils);
+        a.stencils = stencils
+            .iter()
+            .enumerate()
+            .map(|(e, _)| {
+                std::array::from_fn(|k| DVec3::new((e + k) as f64 * 0.3 - 0.5, 0.7, (k as f64).sin()))
+            })
+            .collect();
+        a.spring_form = true;
+        a.masses = masses.iter().map(|m| m + extra).collect();
+        // Projectors: coordinate 9 slides on a plane, 22 sticks.
+        let identity = DVec3::block_identity(1.0);
+        let mut proj = vec![identity; n];
+        let normal = DVec3::new(0.3, -0.2, 0.9).normalize();
+        if with_projectors {
+            proj[9] = DVec3::block_combine(identity, 1.0, DVec3::block_outer(normal, normal), -1.0);
+            proj[22] = DVec3::block_identity(0.0);
+        }
+        let filter = Filter::Projected(&proj);
+        let mut agg = RigidAggregation::<DVec3>::new(1, 1);
+        agg.update(&a, &pattern, &masses, &prescribed, &x, filter).unwrap();
+        // Columns of S R: aggregate g, mode p.
+        let column = |g: usize, p: usize| -> Vec<DVec3> {
+            (0..n)
+                .map(|i| {
+                    if agg.agg[i] as usize != g || agg.agg[i] == NONE {
+                        return DVec3::ZERO;
+                    }
+                    let l = agg.lever[i];
+                    let v = if p < 3 {
+                        let e = DVec3::AXES[p];
+                        e.cross(DVec3::new(l[0], l[1], l[2]))
+                    } else {
+                        DVec3::AXES[p - 3]
+                    };
+                    filter.one(i, v)
+                })
+                .collect()
+        };
+        let mut y = vec![DVec3::ZERO; n];
+        let unfiltered = Filter::None;
+        let mut worst = 0.0f64;
+        let scale = agg.d_blocks.iter().flat_map(|d| (0..6).map(move |p| d[p][p].abs())).fold(0.0, f64::max);
+        for g in 0..agg.n_agg {
+            for p in 0..6 {
+                let c = column(g, p);
+                a.mul(&pattern, unfiltered, &c, &mut y);
+                for h in 0..agg.n_agg {
+                    for q in 0..6 {
+                        let r = column(h, q);
+                        let entry: f64 = r.iter().zip(&y).map(|(r, y)| r.dot(*y)).sum();
+                        let stored = if g == h {
+                            agg.d_blocks[g][q][p]
+                        } else {
+                            let (lo, hi) = (g.min(h) as u32, g.max(h) as u32);
+                            match agg.coarse_pair(lo, hi) {
+                                Some(e) if (h as u32) == lo => agg.o_blocks[e as usize][q][p],
+                                Some(e) => agg.o_blocks[e as usize][p][q],
+                                None => 0.0,
+                            }
+                        };
+                        worst = worst.max((entry - stored).abs());
+                    }
+                }
+            }
+        }
+        assert!(
+            worst <= 1e-10 * scale,
+            "stencils {with_stencils}, projectors {with_projectors}, extra {extra}: largest difference {worst} (scale {scale})"
+        );
     }
 }

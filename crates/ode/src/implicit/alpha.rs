@@ -226,8 +226,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         next: &mut State<C>,
     ) -> Result<StepStats, OdeError> {
         let n = now.len();
-        let n_pairs = lin.pattern().len();
-        self.a.resize(n, n_pairs);
+        self.a.resize(n, lin.pattern(), lin.rank_one_stencils());
         self.trial.resize(n, C::default());
         self.delta.resize(n, C::default());
         let state = self.alpha.as_ref().expect("generalised-α workspace");
@@ -483,19 +482,29 @@ impl<C: Coord> ImplicitWorkspace<C> {
             // Conjugate gradients and the rigid aggregation work from the spring form alone.
             let blocks = !self.a.spring_form || self.solver.needs_blocks();
             let off = if blocks { &mut self.a.off[..] } else { &mut [] };
+            let spring_form = self.a.spring_form;
             lin.force_and_system(
                 t_star,
                 &self.xk,
                 &self.w,
                 c.beta_v,
                 c.beta_x,
-                &mut self.f,
-                &mut self.a.diag,
-                off,
-                self.a.spring_form.then_some(&mut self.a.springs),
+                super::SystemOut {
+                    f: &mut self.f,
+                    diag: &mut self.a.diag,
+                    off,
+                    springs: spring_form.then_some(&mut self.a.springs),
+                    stencils: spring_form.then_some(&mut self.a.stencils),
+                },
                 &mut self.jac,
             );
-            self.a.add_masses(lin.masses());
+            let extra = &mut self.extra_diagonal;
+            extra.clear();
+            extra.resize(n, 0.0);
+            if self.a.spring_form {
+                lin.spring_form_diagonal(c.beta_v, c.beta_x, extra);
+            }
+            self.a.add_masses(lin.masses(), extra);
         } else {
             lin.force(t_star, &self.xk, &self.w, &mut self.f, &mut self.jac);
         }

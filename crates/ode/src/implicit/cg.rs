@@ -7,6 +7,7 @@
 )]
 
 use crate::Coord;
+use crate::parallel::{self, Sum};
 
 use super::system::{Filter, SystemMatrix};
 
@@ -29,9 +30,11 @@ pub(crate) struct BlockJacobi;
 
 impl<C: Coord> Preconditioner<C> for BlockJacobi {
     fn apply(&mut self, a: &SystemMatrix<C>, _: &[(u32, u32)], filter: Filter<'_, C>, r: &[C], z: &mut [C]) {
-        for i in 0..r.len() {
-            z[i] = filter.one(i, C::block_mul(a.jacobi[i], r[i]));
-        }
+        parallel::for_chunks(z, |s, z| {
+            for (k, z) in z.iter_mut().enumerate() {
+                *z = filter.one(s + k, C::block_mul(a.jacobi[s + k], r[s + k]));
+            }
+        });
     }
 }
 
@@ -44,6 +47,8 @@ pub(crate) struct CgBuffers<C> {
     q: Vec<C>,
     /// b scaled down when ‖b‖² overflows.
     scaled_b: Vec<C>,
+    /// The partial sums of the dot products.
+    sum: Sum,
 }
 
 /// How a solve ended.
@@ -55,10 +60,6 @@ pub(crate) struct CgOutcome {
     /// Whether the residual reached the tolerance; false also when A turned out not to be positive
     /// definite along a search direction (the iterate is then the last good one).
     pub converged: bool,
-}
-
-fn dot<C: Coord>(a: &[C], b: &[C]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>()
 }
 
 /// Solves A x = b to ‖b − A x‖ ≤ `tol`·‖b‖, starting from the given x (filtered). `b` must be filtered.
@@ -78,7 +79,7 @@ pub(crate) fn pcg<C: Coord>(
     for v in [&mut buf.r, &mut buf.z, &mut buf.p, &mut buf.q] {
         v.resize(n, C::default());
     }
-    let b_norm2 = dot(b, b);
+    let b_norm2 = buf.sum.dot(b, b);
     if b_norm2.is_infinite() {
         // ‖b‖² overflows while b is finite (forces beyond 1e154): every residual would compare as
         // converged with an infinite target and the solve would return x₀. CG is linear, so solve for
@@ -104,34 +105,40 @@ pub(crate) fn pcg<C: Coord>(
         buf.r.copy_from_slice(b);
     } else {
         a.mul(pattern, filter, x, &mut buf.q);
-        for i in 0..n {
-            buf.r[i] = b[i] - buf.q[i];
-        }
+        let q = &buf.q;
+        parallel::for_chunks(&mut buf.r, |s, r| {
+            for (k, r) in r.iter_mut().enumerate() {
+                *r = b[s + k] - q[s + k];
+            }
+        });
     }
     // A residual at the bottom of the floating-point range counts as solved: tol²‖b‖² underflows to zero
     // there (a motion that has decayed to nothing over thousands of steps), and p·Ap with it.
     let target = (tol * tol * b_norm2).max(f64::MIN_POSITIVE);
-    let mut r2 = dot(&buf.r, &buf.r);
+    let mut r2 = buf.sum.dot(&buf.r, &buf.r);
     if r2 <= target {
         return CgOutcome { iterations: 0, relative_residual: (r2 / b_norm2).sqrt(), converged: true };
     }
     precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
     buf.p.copy_from_slice(&buf.z);
-    let mut rz = dot(&buf.r, &buf.z);
+    let mut rz = buf.sum.dot(&buf.r, &buf.z);
     for it in 0..max_iter {
         a.mul(pattern, filter, &buf.p, &mut buf.q);
-        let pq = dot(&buf.p, &buf.q);
+        let pq = buf.sum.dot(&buf.p, &buf.q);
         if pq.is_nan() || pq <= 0.0 {
             return CgOutcome { iterations: it, relative_residual: (r2 / b_norm2).sqrt(), converged: false };
         }
         let alpha = rz / pq;
-        for i in 0..n {
-            x[i] += buf.p[i] * alpha;
-            buf.r[i] = buf.r[i] - buf.q[i] * alpha;
-        }
+        let (p, q) = (&buf.p, &buf.q);
+        parallel::for_chunks2(x, &mut buf.r, |s, x, r| {
+            for k in 0..x.len() {
+                x[k] += p[s + k] * alpha;
+                r[k] = r[k] - q[s + k] * alpha;
+            }
+        });
         // Converged: the preconditioner (its products with A) is not applied to a residual no
         // iteration will use.
-        r2 = dot(&buf.r, &buf.r);
+        r2 = buf.sum.dot(&buf.r, &buf.r);
         if r2 <= target {
             return CgOutcome {
                 iterations: it + 1,
@@ -140,12 +147,15 @@ pub(crate) fn pcg<C: Coord>(
             };
         }
         precond.apply(a, pattern, filter, &buf.r, &mut buf.z);
-        let rz_new = dot(&buf.r, &buf.z);
+        let rz_new = buf.sum.dot(&buf.r, &buf.z);
         let beta = rz_new / rz;
         rz = rz_new;
-        for i in 0..n {
-            buf.p[i] = buf.z[i] + buf.p[i] * beta;
-        }
+        let z = &buf.z;
+        parallel::for_chunks(&mut buf.p, |s, p| {
+            for (k, p) in p.iter_mut().enumerate() {
+                *p = z[s + k] + *p * beta;
+            }
+        });
     }
     CgOutcome { iterations: max_iter, relative_residual: (r2 / b_norm2).sqrt(), converged: r2 <= target }
 }

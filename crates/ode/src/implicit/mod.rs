@@ -74,16 +74,33 @@ pub trait Linearized<C: Coord> {
         false
     }
 
-    /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass: `diag`
-    /// gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off` gets −β_v D_ij − β_x K_ij on
-    /// the pattern; a system in [`Linearized::spring_form`] is passed `springs` and replaces its
-    /// contents with one block per pattern pair, in the pattern's order (off_e = −(u uᵀ + a I), and
-    /// `diag` the sum of their B exactly), and is passed an empty `off` when the solver needs no
-    /// blocks. The implicit steps call this once per Newton iteration; the
-    /// default goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` as
-    /// it is, and a system whose Jacobians are sums over pairs can override it to skip the four
-    /// intermediate block arrays.
-    #[expect(clippy::too_many_arguments, reason = "the state, the two coefficients and four outputs")]
+    /// For a system in [`Linearized::spring_form`]: the multiple of the identity, beyond the mass and
+    /// the springs, that its diagonal blocks hold (β_v C_i for a drag −C_i v_i), written per coordinate
+    /// into `out` (which holds zeros). [`Linearized::force_and_system`] adds the same to `diag`. The
+    /// default is none.
+    fn spring_form_diagonal(&self, beta_v: f64, beta_x: f64, out: &mut [f64]) {
+        let _ = (beta_v, beta_x, out);
+    }
+
+    /// Quadruples of coordinates coupled by rank-one terms of the system matrix (a bending element's
+    /// w wᵀ, w = Σ_a e_a ⊗ u_a), which a system in [`Linearized::spring_form`] writes as four vectors
+    /// each ([`SystemOut::stencils`]). Every pair of a quadruple must be a pattern pair. Constant while
+    /// the topology is; the default is none.
+    fn rank_one_stencils(&self) -> &[[u32; 4]] {
+        &[]
+    }
+
+    /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass
+    /// ([`SystemOut`]): `diag` gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off`
+    /// gets −β_v D_ij − β_x K_ij on the pattern; a system in [`Linearized::spring_form`] is passed
+    /// `springs` and replaces its contents with one block per pattern pair, in the pattern's order
+    /// (off_e = −(u uᵀ + a I)), and `stencils` with four vectors per rank-one stencil, in their order
+    /// (A gains w wᵀ), `diag` holding the sum of both exactly; it is passed an empty `off` when the
+    /// solver needs no blocks. The implicit steps call this once per Newton iteration; the default
+    /// goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` and
+    /// `stencils` as they are, and a system whose Jacobians are sums over pairs can override it to
+    /// skip the four intermediate block arrays.
+    #[expect(clippy::too_many_arguments, reason = "the state, the two coefficients and the outputs")]
     fn force_and_system(
         &mut self,
         t: f64,
@@ -91,23 +108,35 @@ pub trait Linearized<C: Coord> {
         v: &[C],
         beta_v: f64,
         beta_x: f64,
-        f: &mut [C],
-        diag: &mut [C::Block],
-        off: &mut [C::Block],
-        springs: Option<&mut Vec<SpringBlock<C>>>,
+        out: SystemOut<'_, C>,
         scratch: &mut Jacobians<C>,
     ) {
-        let _ = springs;
         scratch.resize(x.len(), self.pattern().len());
         scratch.clear();
-        self.force_and_jacobians(t, x, v, f, scratch);
-        for (a, (&d, &k)) in diag.iter_mut().zip(scratch.d_diag.iter().zip(&scratch.k_diag)) {
+        self.force_and_jacobians(t, x, v, out.f, scratch);
+        for (a, (&d, &k)) in out.diag.iter_mut().zip(scratch.d_diag.iter().zip(&scratch.k_diag)) {
             *a = C::block_combine(d, -beta_v, k, -beta_x);
         }
-        for (a, (&d, &k)) in off.iter_mut().zip(scratch.d_off.iter().zip(&scratch.k_off)) {
+        for (a, (&d, &k)) in out.off.iter_mut().zip(scratch.d_off.iter().zip(&scratch.k_off)) {
             *a = C::block_combine(d, -beta_v, k, -beta_x);
         }
     }
+}
+
+/// Where [`Linearized::force_and_system`] writes the force and the system matrix.
+#[derive(Debug)]
+pub struct SystemOut<'a, C: Coord> {
+    /// The force f(t, x, v), not divided by the mass.
+    pub f: &'a mut [C],
+    /// −β_v D_ii − β_x K_ii per coordinate.
+    pub diag: &'a mut [C::Block],
+    /// −β_v D_ij − β_x K_ij per pattern pair; empty when the solver needs no blocks.
+    pub off: &'a mut [C::Block],
+    /// In spring form: one block per pattern pair, in the pattern's order.
+    pub springs: Option<&'a mut Vec<SpringBlock<C>>>,
+    /// In spring form: the four vectors of each rank-one stencil ([`Linearized::rank_one_stencils`]),
+    /// in their order.
+    pub stencils: Option<&'a mut Vec<[C; 4]>>,
 }
 
 /// One pair of a matrix in spring form (see [`Linearized::spring_form`]): B = u uᵀ + a I between

@@ -7,6 +7,7 @@
 )]
 
 use crate::Coord;
+use crate::parallel::{self, Scatter};
 
 use super::{Jacobians, SpringBlock};
 
@@ -25,6 +26,14 @@ pub(crate) struct SystemMatrix<C: Coord> {
     /// Whether `springs` and `masses` describe the matrix: A = M + Σ_e B_e (e_i − e_j)(e_i − e_j)ᵀ
     /// ([`super::Linearized::spring_form`]), and [`Self::mul`] multiplies from them.
     pub spring_form: bool,
+    /// The pattern's pairs split over the threads ([`Self::mul`] on every core, the serial product's
+    /// bits).
+    pub scatter: Scatter,
+    /// In spring form, the rank-one stencils: their coordinates ([`super::Linearized::rank_one_stencils`],
+    /// copied when they change), their vectors u_a (A gains w wᵀ, w = Σ e_a ⊗ u_a), and their split.
+    pub stencil_vertices: Vec<[u32; 4]>,
+    pub stencils: Vec<[C; 4]>,
+    pub stencil_scatter: Scatter,
 }
 
 impl<C: Coord> SystemMatrix<C> {
@@ -36,15 +45,30 @@ impl<C: Coord> SystemMatrix<C> {
             springs: Vec::new(),
             masses: Vec::new(),
             spring_form: false,
+            scatter: Scatter::new(),
+            stencil_vertices: Vec::new(),
+            stencils: Vec::new(),
+            stencil_scatter: Scatter::new(),
         }
     }
 
-    /// Sets the sizes; allocates only when they grow.
-    pub fn resize(&mut self, n: usize, n_pairs: usize) {
+    /// Sets the sizes for `n` coordinates and the pattern's pairs, and splits the pairs over the
+    /// threads; allocates only when the sizes grow or the pattern changed.
+    pub fn resize(&mut self, n: usize, pattern: &[(u32, u32)], stencils: &[[u32; 4]]) {
         let z = C::block_identity(0.0);
         self.diag.resize(n, z);
         self.jacobi.resize(n, z);
-        self.off.resize(n_pairs, z);
+        self.off.resize(pattern.len(), z);
+        self.scatter.prepare(n, pattern.len(), |e| [pattern[e].0, pattern[e].1]);
+        if self.stencil_vertices != stencils {
+            self.stencil_vertices.clear();
+            self.stencil_vertices.extend_from_slice(stencils);
+            self.stencil_scatter.invalidate();
+        }
+        if !self.stencil_scatter.ready_for(n, stencils.len()) {
+            self.stencil_scatter.prepare(n, stencils.len(), |e| stencils[e]);
+        }
+        self.stencils.resize(stencils.len(), [C::default(); 4]);
     }
 
     /// A = M − β D − β₂ K from Jacobians (backward Euler and BDF2 pass β₂ = β²), and its block-Jacobi
@@ -63,45 +87,116 @@ impl<C: Coord> SystemMatrix<C> {
     }
 
     /// Completes a matrix whose blocks [`super::Linearized::force_and_system`] wrote: adds the masses to
-    /// the diagonal and inverts the diagonal blocks.
-    pub fn add_masses(&mut self, masses: &[f64]) {
-        for ((a, j), &m) in self.diag.iter_mut().zip(self.jacobi.iter_mut()).zip(masses) {
-            *a = C::block_combine(*a, 1.0, C::block_identity(m), 1.0);
-            *j = C::block_inverse(*a);
-        }
+    /// the diagonal and inverts the diagonal blocks; in spring form the diagonal's scalar part is the
+    /// mass plus `extra` ([`super::Linearized::spring_form_diagonal`], which the blocks already hold).
+    pub fn add_masses(&mut self, masses: &[f64], extra: &[f64]) {
+        let (diag, jacobi) = (&mut self.diag, &mut self.jacobi);
+        parallel::for_chunks2(diag, jacobi, |s, diag, jacobi| {
+            for (k, (a, j)) in diag.iter_mut().zip(jacobi.iter_mut()).enumerate() {
+                *a = C::block_combine(*a, 1.0, C::block_identity(masses[s + k]), 1.0);
+                *j = C::block_inverse(*a);
+            }
+        });
         if self.spring_form {
             self.masses.clear();
-            self.masses.extend_from_slice(masses);
+            self.masses.extend(masses.iter().zip(extra).map(|(m, e)| m + e));
         }
     }
 
-    /// y = A x, then filtered.
+    /// Makes the block-Jacobi inverses those of the filtered system S A S for every coordinate whose
+    /// projector S_i is neither the identity nor zero (a contact constrains one direction of it):
+    /// J_i = S_i (S_i A_ii S_i + t (I − S_i))⁻¹ S_i, the inverse of A_ii on the free directions (t sets
+    /// the constrained directions apart and drops out). S_i A_ii⁻¹ S_i, the unfiltered inverse
+    /// projected, is a poor stand-in when A_ii is stiff along a direction that leans on the contact
+    /// normal.
+    pub fn filter_jacobi(&mut self, filter: Filter<'_, C>) {
+        let Filter::Projected(s) = filter else { return };
+        let identity = C::block_identity(1.0);
+        let zero = C::block_identity(0.0);
+        let same = |a: C::Block, b: C::Block| {
+            (0..C::DIM).all(|r| (0..C::DIM).all(|c| C::block_entry(a, r, c) == C::block_entry(b, r, c)))
+        };
+        for (i, &si) in s.iter().enumerate() {
+            if same(si, identity) || same(si, zero) {
+                continue;
+            }
+            let a = self.diag[i];
+            let t = (0..C::DIM).map(|k| C::block_entry(a, k, k).abs()).sum::<f64>() / C::DIM as f64;
+            let sas = C::block_mul_blocks(C::block_mul_blocks(si, a), si);
+            let shifted = C::block_combine(sas, 1.0, C::block_combine(identity, t, si, -t), 1.0);
+            self.jacobi[i] = C::block_mul_blocks(C::block_mul_blocks(si, C::block_inverse(shifted)), si);
+        }
+    }
+
+    /// y = A x, then filtered: on every core for large systems ([`Scatter`]), with the serial
+    /// product's bits.
     pub fn mul(&self, pattern: &[(u32, u32)], filter: Filter<'_, C>, x: &[C], y: &mut [C]) {
-        if self.spring_form {
-            // y_i = m_i x_i + Σ_e B_e (x_i − x_j), and its negative at j.
-            for i in 0..x.len() {
-                y[i] = x[i] * self.masses[i];
+        // In block form the stencils are in the pair blocks already.
+        let stencil_pass = self.spring_form && !self.stencil_vertices.is_empty();
+        self.scatter.run(y, |range, pairs, y| {
+            let s = range.start;
+            if self.spring_form {
+                // y_i = m_i x_i + Σ_e B_e (x_i − x_j), and its negative at j.
+                for i in range.clone() {
+                    y[i - s] = x[i] * self.masses[i];
+                }
+                for &e in pairs {
+                    let SpringBlock { i, j, u, a } = self.springs[e as usize];
+                    let (i, j) = (i as usize, j as usize);
+                    let d = x[i] - x[j];
+                    let b = u * u.dot(d) + d * a;
+                    if range.contains(&i) {
+                        y[i - s] += b;
+                    }
+                    if range.contains(&j) {
+                        y[j - s] = y[j - s] - b;
+                    }
+                }
+            } else {
+                for i in range.clone() {
+                    y[i - s] = C::block_mul(self.diag[i], x[i]);
+                }
+                for &e in pairs {
+                    let e = e as usize;
+                    let (i, j) = (pattern[e].0 as usize, pattern[e].1 as usize);
+                    if range.contains(&i) {
+                        y[i - s] += C::block_mul(self.off[e], x[j]);
+                    }
+                    if range.contains(&j) {
+                        y[j - s] += C::block_mul_transpose(self.off[e], x[i]);
+                    }
+                }
             }
-            for &SpringBlock { i, j, u, a } in &self.springs {
-                let (i, j) = (i as usize, j as usize);
-                let d = x[i] - x[j];
-                let b = u * u.dot(d) + d * a;
-                y[i] += b;
-                y[j] = y[j] - b;
+            if !stencil_pass {
+                for i in range {
+                    y[i - s] = filter.one(i, y[i - s]);
+                }
             }
-            filter.apply(y);
+        });
+        if !stencil_pass {
             return;
         }
-        for i in 0..x.len() {
-            y[i] = C::block_mul(self.diag[i], x[i]);
-        }
-        for (e, &(i, j)) in pattern.iter().enumerate() {
-            let (i, j) = (i as usize, j as usize);
-            let (yi, yj) = (C::block_mul(self.off[e], x[j]), C::block_mul_transpose(self.off[e], x[i]));
-            y[i] += yi;
-            y[j] += yj;
-        }
-        filter.apply(y);
+        // y += Σ w (w·x) over the rank-one stencils, then the filter.
+        let (vertices, stencils) = (&self.stencil_vertices, &self.stencils);
+        self.stencil_scatter.run(y, |range, elements, y| {
+            let s = range.start;
+            for &e in elements {
+                let (v, u) = (vertices[e as usize], &stencils[e as usize]);
+                let w = u[0].dot(x[v[0] as usize])
+                    + u[1].dot(x[v[1] as usize])
+                    + u[2].dot(x[v[2] as usize])
+                    + u[3].dot(x[v[3] as usize]);
+                for k in 0..4 {
+                    let i = v[k] as usize;
+                    if range.contains(&i) {
+                        y[i - s] += u[k] * w;
+                    }
+                }
+            }
+            for i in range {
+                y[i - s] = filter.one(i, y[i - s]);
+            }
+        });
     }
 }
 

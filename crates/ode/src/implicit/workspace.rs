@@ -48,6 +48,8 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     pub(super) f: Vec<C>,
     pub(super) jac: Jacobians<C>,
     pub(super) a: SystemMatrix<C>,
+    /// The spring form's diagonal beyond the masses ([`super::Linearized::spring_form_diagonal`]).
+    pub(super) extra_diagonal: Vec<f64>,
     pub(super) b: Vec<C>,
     /// Δv, kept between steps as the next solve's first guess.
     pub(super) dv: Vec<C>,
@@ -91,6 +93,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             f: zeros(),
             jac: Jacobians::new(n, 0),
             a: SystemMatrix::new(),
+            extra_diagonal: Vec::new(),
             b: zeros(),
             dv: zeros(),
             cg: CgBuffers::default(),
@@ -169,6 +172,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         )]
         let mut setup_done = None;
         filter.apply(&mut self.dv);
+        self.a.filter_jacobi(filter);
         let outcome: CgOutcome = match self.solver {
             LinearSolver::ConjugateGradient { tolerance, max_iterations } => pcg(
                 &self.a,
@@ -227,8 +231,10 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     self.positions.clear();
                     self.positions.resize(masses.len(), C::default());
                 }
-                if self.coarse_stale || !agg.is_built() {
-                    agg.update(&self.a, pattern, masses, prescribed, &self.positions)
+                // Once per step, and again whenever the contacts constrain other directions than those
+                // the coarse matrix was built for.
+                if self.coarse_stale || !agg.is_built() || agg.filter_changed(filter) {
+                    agg.update(&self.a, pattern, masses, prescribed, &self.positions, filter)
                         .map_err(OdeError::Factorization)?;
                     self.coarse_stale = false;
                     if let Some(p) = &mut self.profile {
