@@ -61,18 +61,26 @@ fn every_integrator_keeps_the_curtain_finite_at_the_thesis_step() {
     }
 }
 
+/// A run far beyond its stable step is stopped by its speed bound while still finite, at the step
+/// where a particle first outran it; with the bounds off, when it goes non-finite, naming the surface.
 #[test]
-fn a_diverging_run_reports_the_step_where_it_went_non_finite() {
+fn a_diverging_run_reports_the_step_where_it_left_its_bounds_or_went_non_finite() {
     let mut loaded = ThesisScene::Curtain.load().unwrap();
     loaded.scene.dt_s = 0.5;
-    let objects = vec![];
-    let mut world = Flex3dWorld::new(&loaded.scene, objects).unwrap();
-    let anima_cloth::flex3d::StepError::NonFinite(err) = world.run_to_step(100_000).unwrap_err() else {
+    let mut world = Flex3dWorld::new(&loaded.scene, vec![]).unwrap();
+    let anima_cloth::flex3d::StepError::Diverged(err) = world.run_to_step(100_000).unwrap_err() else {
+        panic!("expected the bounds to stop it")
+    };
+    assert!(matches!(err.bound, anima_cloth::bounds::Bound::Speed { .. }), "{err}");
+    assert!(err.step > 1 && err.step < 100, "{err}");
+    let mut world = Flex3dWorld::new(&loaded.scene, vec![]).unwrap();
+    world.set_bounds(anima_cloth::bounds::Bounds::unbounded());
+    let anima_cloth::flex3d::StepError::NonFinite(late) = world.run_to_step(100_000).unwrap_err() else {
         panic!("expected a non-finite state")
     };
-    assert!(err.step > 1 && err.step < 100_000, "{err}");
-    assert_eq!(err.surface, "cortina");
-    assert!(err.to_string().contains("non-finite state at step"), "{err}");
+    assert!(late.step > err.step as usize && late.step < 100_000, "{late}");
+    assert_eq!(late.surface, "cortina");
+    assert!(late.to_string().contains("non-finite state at step"), "{late}");
 }
 
 #[test]

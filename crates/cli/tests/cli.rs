@@ -114,11 +114,13 @@ fn a_diverging_run_fails_and_names_the_step() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("non-finite at step"), "{err}");
+    // Caught by its speed bound while still finite (issue #37), not when it goes non-finite.
+    assert!(err.contains("diverged at step 4") && err.contains("bound: speed"), "{err}");
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["all_finite"], false);
-    assert!(summary["non_finite"]["step"].as_u64().unwrap() > 0);
+    assert_eq!(summary["all_finite"], true);
+    assert!(summary["error"].as_str().is_some_and(|e| e.contains("diverged")), "{summary}");
+    assert_eq!(summary["steps"], 4);
     std::fs::remove_dir_all(&out).unwrap();
 }
 

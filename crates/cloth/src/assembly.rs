@@ -201,29 +201,4 @@ impl StencilAssembly {
             self.scatter.prepare(n, stencils.len(), |e| stencils[e]);
         }
     }
-
-    /// Adds each element's per-particle force and block, `term(e, k)` for its k-th particle, to `f`
-    /// and `diag`, in the elements' order (the terms computed beforehand, once per element).
-    pub fn gather(
-        &mut self,
-        stencils: &[[u32; 4]],
-        f: &mut [DVec3],
-        diag: &mut [DMat3],
-        term: impl Fn(usize, usize) -> (DVec3, DMat3) + Sync + Send,
-    ) {
-        self.prepare(f.len(), stencils);
-        self.scatter.run2(f, diag, |range, elements, f, diag| {
-            let s = range.start;
-            for &e in elements {
-                for (k, &i) in stencils[e as usize].iter().enumerate() {
-                    let i = i as usize;
-                    if range.contains(&i) {
-                        let (force, block) = term(e as usize, k);
-                        f[i - s] += force;
-                        diag[i - s] += block;
-                    }
-                }
-            }
-        });
-    }
 }

@@ -42,6 +42,7 @@
 //! ```
 
 mod assembly;
+pub mod bounds;
 pub mod contact_mode;
 pub mod flex3d;
 pub mod membrane;

@@ -56,6 +56,7 @@ use anima_geom::DVec3;
 use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, Stepper};
 use glam::DMat3;
 
+use crate::bounds::{BoundsWatch, Defaults};
 use crate::network_sim::RunError;
 
 /// The material of a [`Membrane`], in the units of its field names.
@@ -503,6 +504,9 @@ pub struct MembraneSim {
     step: usize,
     /// Linear-solver iterations of the implicit steps so far.
     pub solver_iterations: usize,
+    /// The physical bounds the run is checked against ([`crate::bounds`]: speed and energy; a
+    /// membrane has no springs whose strain to bound).
+    pub bounds: BoundsWatch,
 }
 
 impl MembraneSim {
@@ -511,7 +515,10 @@ impl MembraneSim {
         let n = x.len();
         assert_eq!(n, membrane.n_vertices(), "one position per vertex");
         let state = State::new(x, vec![DVec3::ZERO; n]);
+        let defaults = Defaults::passive(membrane.gravity);
+        let bounds = BoundsWatch::new(defaults, &state.x, &state.v, membrane.masses(), membrane.gravity, 0.0);
         Self {
+            bounds,
             membrane,
             stepper: Stepper::new(integrator, n),
             next: state.clone(),
@@ -538,9 +545,16 @@ impl MembraneSim {
         self.dt
     }
 
-    /// Takes `n` steps; stops at the first that fails or leaves a non-finite value.
+    /// Takes `n` steps; stops at the first that fails, leaves a non-finite value or leaves the bounds
+    /// (checked every step for implicit integrators, every few dozen for explicit ones).
     pub fn run(&mut self, n: usize) -> Result<(), RunError> {
-        for _ in 0..n {
+        let every =
+            if self.stepper.integrator().is_implicit() { 1 } else { crate::bounds::EXPLICIT_CHECK_EVERY };
+        if self.step == 0 {
+            let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
+            self.bounds.restart(x, v, m, self.membrane.gravity, 0.0);
+        }
+        for k in 0..n {
             let t = self.time();
             let stats = self
                 .stepper
@@ -551,6 +565,18 @@ impl MembraneSim {
             self.solver_iterations += stats.solver_iterations;
             if let Some(particle) = self.state.first_non_finite() {
                 return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+            }
+            if (k + 1) % every == 0 || k + 1 == n {
+                let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
+                self.bounds.check(
+                    self.step as u64,
+                    self.time(),
+                    x,
+                    v,
+                    m,
+                    self.membrane.gravity,
+                    std::iter::empty(),
+                )?;
             }
         }
         Ok(())

@@ -13,8 +13,9 @@ use anima_geom::DVec3;
 use anima_ode::contact::{Contact, ContactModel};
 use anima_ode::{Integrator, OdeError, State, StepStats, Stepper};
 
+use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
 use crate::contact_mode::ContactMode;
-use crate::self_collision::{SelfCollision, SelfCollisionResponse, SelfCollisionStats};
+use crate::self_collision::{OBJECT_ROUNDS, SelfCollision, SelfCollisionResponse, SelfCollisionStats};
 use crate::spring_net::SpringNetwork;
 
 /// A static obstacle given analytically.
@@ -175,16 +176,37 @@ pub struct NetworkSim {
     pub self_collision_total: SelfCollisionStats,
     /// Per particle, whether the last contact pass after the step moved it.
     touched: Vec<bool>,
+    /// Per particle, whether a collider answered it this step (the self-collision response holds it),
+    /// and the step's end before that response (for its next round).
+    held: Vec<bool>,
+    before_filter: (Vec<DVec3>, Vec<DVec3>),
     step: usize,
     dt: f64,
     pub stats: StepStats,
+    /// The physical bounds the run is checked against ([`crate::bounds`]), and the fastest drive of
+    /// the pinned particles so far (m/s).
+    bounds: BoundsWatch,
+    driven: f64,
 }
 
 impl NetworkSim {
     pub fn new(network: SpringNetwork, x: Vec<DVec3>, integrator: Integrator, dt: f64) -> Self {
         let n = network.n_particles();
         assert_eq!(x.len(), n, "one position per particle");
+        let at_rest = vec![DVec3::ZERO; n];
+        let masses = anima_ode::Linearized::masses(&network);
+        let elastic = network.elastic_energy(&x);
+        let bounds = BoundsWatch::new(
+            Defaults::passive(network.gravity),
+            &x,
+            &at_rest,
+            masses,
+            network.gravity,
+            elastic,
+        );
         Self {
+            bounds,
+            driven: 0.0,
             stepper: Stepper::new(integrator, n),
             state: State::new(x, vec![DVec3::ZERO; n]),
             scratch: State::zeros(n),
@@ -200,6 +222,8 @@ impl NetworkSim {
             self_collision_last: SelfCollisionStats::default(),
             self_collision_total: SelfCollisionStats::default(),
             touched: vec![false; n],
+            held: vec![false; n],
+            before_filter: (Vec::new(), Vec::new()),
             step: 0,
             dt,
             stats: StepStats::default(),
@@ -251,16 +275,85 @@ impl NetworkSim {
     /// the step), and the next call's velocity makes up for it.
     pub fn drive_pinned(&mut self, mut target: impl FnMut(usize) -> DVec3) {
         let inv_dt = 1.0 / self.dt;
+        let mut fastest = 0.0f64;
         for (p, &pin) in self.network.pinned().iter().enumerate() {
             if pin {
                 self.state.v[p] = (target(p) - self.state.x[p]) * inv_dt;
+                fastest = fastest.max(self.state.v[p].length());
             }
+        }
+        // A driven network is given energy and speed from outside: no energy bound, and a speed bound
+        // that admits the drive.
+        self.driven = self.driven.max(fastest);
+        let b = &mut self.bounds.bounds;
+        b.energy_factor = None;
+        b.max_speed = b.max_speed.max(crate::bounds::SPEED_FACTOR * fastest);
+    }
+
+    /// The physical bounds the run is checked against ([`crate::bounds`]: by default
+    /// [`Bounds::for_start`] of the network at rest, with the energy bound until pinned particles are
+    /// driven).
+    pub fn bounds(&self) -> Bounds {
+        self.bounds.bounds
+    }
+
+    /// Sets the bounds; [`Bounds::unbounded`] checks finiteness only.
+    pub fn set_bounds(&mut self, bounds: Bounds) {
+        let masses = anima_ode::Linearized::masses(&self.network);
+        let elastic = self.network.elastic_energy(&self.state.x);
+        self.bounds.set(bounds, &self.state.x, &self.state.v, masses, self.network.gravity, elastic);
+    }
+
+    /// Takes the bounds from the state as it is now (defaults from it, the energy counted from it):
+    /// for a caller that changed [`NetworkSim::state`] in the middle of a run (a throw, a kick), which
+    /// gives the network energy the bounds would otherwise take for a blow-up. The first step does this
+    /// by itself.
+    pub fn restart_bounds(&mut self) {
+        let masses = anima_ode::Linearized::masses(&self.network);
+        let elastic = self.network.elastic_energy(&self.state.x);
+        self.bounds.restart(&self.state.x, &self.state.v, masses, self.network.gravity, elastic);
+        if self.driven > 0.0 {
+            let b = &mut self.bounds.bounds;
+            b.energy_factor = None;
+            b.max_speed = b.max_speed.max(crate::bounds::SPEED_FACTOR * self.driven);
         }
     }
 
+    /// At the first step: the default bounds are taken from the state the run starts from (a caller may
+    /// have set velocities or moved particles since the network was built).
+    fn start_bounds(&mut self) {
+        if self.step == 0 {
+            self.restart_bounds();
+        }
+    }
+
+    /// Checks the state against the bounds ([`crate::bounds`]).
+    fn check_bounds(&self) -> Result<(), OutOfBounds> {
+        let masses = anima_ode::Linearized::masses(&self.network);
+        let springs = self.network.springs().iter().map(|s| (s.i, s.j, s.rest_length));
+        let (x, v) = (&self.state.x, &self.state.v);
+        self.bounds.check(self.step as u64, self.time(), x, v, masses, self.network.gravity, springs)
+    }
+
     /// One step: integrate, then resolve contacts (or integrate with the contacts constrained inside the
-    /// solve, with [`ContactMode::InSolve`]).
-    pub fn step(&mut self) -> Result<(), OdeError> {
+    /// solve, with [`ContactMode::InSolve`]); a non-finite state or one that left the bounds is an error
+    /// naming the step.
+    pub fn step(&mut self) -> Result<(), RunError> {
+        self.start_bounds();
+        self.step_unchecked().map_err(|source| RunError::Solver { step: self.step + 1, source })?;
+        self.check_step()?;
+        Ok(self.check_bounds()?)
+    }
+
+    /// A non-finite state is an error naming the step and the particle.
+    fn check_step(&self) -> Result<(), RunError> {
+        match self.state.first_non_finite() {
+            Some(particle) => Err(RunError::NonFinite { step: self.step, time: self.time(), particle }),
+            None => Ok(()),
+        }
+    }
+
+    fn step_unchecked(&mut self) -> Result<(), OdeError> {
         let t = self.time();
         let in_solve = self.contact == ContactMode::InSolve && !self.colliders.is_empty();
         let s = if in_solve {
@@ -282,8 +375,18 @@ impl NetworkSim {
         self.stats.contacts = s.contacts;
         self.stats.late_contacts += s.late_contacts;
         std::mem::swap(&mut self.state, &mut self.scratch);
+        self.held.clear();
+        self.held.resize(self.state.x.len(), false);
         if !in_solve && !self.colliders.is_empty() && self.resolve_contacts() {
             self.stepper.reset_history_of(&self.touched);
+            self.held.copy_from_slice(&self.touched);
+        }
+        if in_solve {
+            for report in self.stepper.contact_reports() {
+                if report.regime != anima_ode::contact::Regime::Free {
+                    self.held[report.coordinate as usize] = true;
+                }
+            }
         }
         if let Some(settings) = self.self_collision
             && !self.triangles.is_empty()
@@ -313,52 +416,98 @@ impl NetworkSim {
     /// A sheet with nothing but its springs, stepped with symplectic Euler, takes the network's fused
     /// path ([`SpringNetwork::run_symplectic_euler`]): the same bits, with fewer passes over memory.
     pub fn run(&mut self, n: usize) -> Result<(), RunError> {
-        if self.fuses()
-            && let Some(outcome) =
-                self.network.run_symplectic_euler(n, self.dt, &mut self.state.x, &mut self.state.v)
-        {
-            let done = outcome.err().unwrap_or(n);
-            self.step += done;
-            self.stats.evaluations += done;
-            if outcome.is_ok() {
-                return Ok(());
+        self.start_bounds();
+        // Explicit steps are checked against the bounds every few dozen steps, implicit ones every step.
+        let every =
+            if self.stepper.integrator().is_implicit() { 1 } else { crate::bounds::EXPLICIT_CHECK_EVERY };
+        let mut left = n;
+        if self.fuses() {
+            while left > 0 {
+                let chunk = left.min(every);
+                let Some(outcome) =
+                    self.network.run_symplectic_euler(chunk, self.dt, &mut self.state.x, &mut self.state.v)
+                else {
+                    break;
+                };
+                let done = outcome.err().unwrap_or(chunk);
+                self.step += done;
+                self.stats.evaluations += done;
+                if outcome.is_err() {
+                    let particle = self.state.first_non_finite().unwrap_or(0);
+                    return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+                }
+                self.check_bounds()?;
+                left -= chunk;
             }
-            let particle = self.state.first_non_finite().unwrap_or(0);
-            return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
         }
-        for _ in 0..n {
-            self.step().map_err(|e| RunError::Solver { step: self.step + 1, source: e })?;
-            if let Some(particle) = self.state.first_non_finite() {
-                return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+        for k in 0..left {
+            self.step_unchecked().map_err(|e| RunError::Solver { step: self.step + 1, source: e })?;
+            self.check_step()?;
+            if (k + 1) % every == 0 || k + 1 == left {
+                self.check_bounds()?;
             }
         }
         Ok(())
     }
 
-    /// The self-collision filter on the step just taken ([`SelfCollisionResponse::filter_step`]).
-    /// Returns whether any particle changed.
+    /// The self-collision filter on the step just taken ([`SelfCollisionResponse::filter_step`]),
+    /// answered together with the colliders as the Oliveira cloth's is: a particle a collider answered
+    /// this step is held (inverse mass 0), and a particle the filter would push into a collider is held
+    /// too and the filter taken again from the step's end before it, at most
+    /// [`OBJECT_ROUNDS`] more times. Returns whether any particle changed.
     fn resolve_self_collisions(&mut self, settings: &SelfCollision) -> bool {
-        let n = self.network.n_particles();
-        if self.inv_mass.len() != n {
-            let masses = anima_ode::Linearized::masses(&self.network);
-            let pinned = self.network.pinned();
-            self.inv_mass = masses.iter().zip(pinned).map(|(m, &p)| if p { 0.0 } else { 1.0 / m }).collect();
-        }
-        self.touched.fill(false);
-        // After the swap, `scratch` holds the step's start and `state` its end.
-        let stats = self.self_response.filter_step(
-            settings,
-            self.dt,
-            &self.scratch.x,
-            &mut self.state.x,
-            &mut self.state.v,
-            &self.inv_mass,
-            &self.triangles,
-            &mut self.touched,
+        let masses = anima_ode::Linearized::masses(&self.network);
+        let pinned = self.network.pinned();
+        self.inv_mass.clear();
+        self.inv_mass.extend(
+            masses.iter().zip(pinned).zip(&self.held).map(|((m, &p), &h)| if p || h { 0.0 } else { 1.0 / m }),
         );
-        self.self_collision_last = stats;
-        self.self_collision_total += stats;
-        stats.changed_particles > 0
+        self.before_filter.0.clear();
+        self.before_filter.0.extend_from_slice(&self.state.x);
+        self.before_filter.1.clear();
+        self.before_filter.1.extend_from_slice(&self.state.v);
+        let rounds = OBJECT_ROUNDS;
+        for round in 0..=rounds {
+            if round > 0 {
+                self.state.x.copy_from_slice(&self.before_filter.0);
+                self.state.v.copy_from_slice(&self.before_filter.1);
+            }
+            self.touched.fill(false);
+            // After the swap, `scratch` holds the step's start and `state` its end.
+            let stats = self.self_response.filter_step(
+                settings,
+                self.dt,
+                &self.scratch.x,
+                &mut self.state.x,
+                &mut self.state.v,
+                &self.inv_mass,
+                &self.triangles,
+                &mut self.touched,
+            );
+            let mut pushed_in = false;
+            if round < rounds {
+                for i in 0..self.state.x.len() {
+                    if !self.touched[i] || self.inv_mass[i] == 0.0 {
+                        continue;
+                    }
+                    let (a, b) = (self.scratch.x[i], self.state.x[i]);
+                    if self
+                        .colliders
+                        .iter()
+                        .any(|c| c.push_out(b, 0.0).is_some() || c.entry(a, b, 0.0).is_some())
+                    {
+                        self.inv_mass[i] = 0.0;
+                        pushed_in = true;
+                    }
+                }
+            }
+            if !pushed_in {
+                self.self_collision_last = stats;
+                self.self_collision_total += stats;
+                return stats.changed_particles > 0;
+            }
+        }
+        unreachable!("the last round returns")
     }
 
     /// Pushes particles out of colliders (at their entry point when they crossed the surface during the
@@ -446,6 +595,9 @@ impl ContactModel<DVec3> for AnalyticContacts<'_> {
 pub enum RunError {
     #[error("non-finite state at step {step} (t = {time} s), particle {particle}")]
     NonFinite { step: usize, time: f64, particle: usize },
+    /// The state left its physical bounds ([`crate::bounds`]).
+    #[error(transparent)]
+    Diverged(#[from] OutOfBounds),
     #[error("step {step}: {source}")]
     Solver { step: usize, source: OdeError },
 }

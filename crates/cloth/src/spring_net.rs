@@ -161,6 +161,17 @@ impl SpringNetwork {
             .fold(0.0, f64::max)
     }
 
+    /// The energy the springs store at `x`, ½ k (|d| − L0)², J.
+    pub fn elastic_energy(&self, x: &[DVec3]) -> f64 {
+        self.springs
+            .iter()
+            .map(|s| {
+                let stretch = (x[s.j as usize] - x[s.i as usize]).length() - s.rest_length;
+                0.5 * s.stiffness * stretch * stretch
+            })
+            .sum()
+    }
+
     /// Adds the spring forces at (x, v) to `f`. The hot loop of a sheet step.
     #[inline]
     fn add_spring_forces(&mut self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
@@ -638,7 +649,7 @@ mod system_tests {
         let (mut f1, mut f2) = (vec![DVec3::ZERO; 25], vec![DVec3::ZERO; 25]);
         let (mut d1, mut o1) = (vec![DMat3::ZERO; 25], vec![DMat3::ZERO; pairs]);
         let mut scratch = Jacobians::new(25, pairs);
-        let out = SystemOut { f: &mut f1, diag: &mut d1, off: &mut o1, springs: None, stencils: None };
+        let out = SystemOut { f: &mut f1, diag: &mut d1, off: &mut o1, springs: None };
         net.force_and_system(0.0, &x, &v, bv, bx, out, &mut scratch);
         let mut jac = Jacobians::new(25, pairs);
         net.force_and_jacobians(0.0, &x, &v, &mut f2, &mut jac);

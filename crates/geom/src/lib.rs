@@ -50,8 +50,8 @@ pub use query::{Cylinder, HalfSpace, MeshSolid, Proximity, Solid, SolidError, Sp
 /// (swept broad phase, proximity, continuous time of impact). Re-exported at the root because the cloth
 /// crate and the run summaries need nothing else from the module.
 pub use self_contact::{
-    EdgeEdgeImpact, EdgeEdgePair, EdgeTriangleCrossing, SelfContactBroadPhase, VertexTriangleImpact,
-    VertexTrianglePair, count_self_intersections, edge_edge_impact, self_intersections,
-    vertex_triangle_impact,
+    CountAbandoned, EdgeEdgeImpact, EdgeEdgePair, EdgeTriangleCrossing, SelfContactBroadPhase,
+    VertexTriangleImpact, VertexTrianglePair, count_self_intersections, count_self_intersections_within,
+    edge_edge_impact, self_intersections, vertex_triangle_impact,
 };
 pub use shapes::box_mesh;

@@ -1,7 +1,7 @@
 //! Convergence orders, energy behaviour, stability intervals and step control of every integrator, on
 //! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t).
 
-use anima_ode::stability::stability_limit;
+use anima_ode::stability::{damped_stability_limit, stability_limit};
 use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, StepControl, Stepper, integrate};
 
 struct Spring;
@@ -119,6 +119,24 @@ fn symplectic_euler_keeps_energy_bounded_and_forward_euler_does_not() {
     assert!(drift < 0.03, "symplectic Euler energy drifted by {drift} over 1e5 steps");
     let (_, last) = run(Integrator::ForwardEuler);
     assert!(last > 2.0 * 1e10, "forward Euler must gain energy: {last}");
+}
+
+/// Damping narrows symplectic Euler's interval to exactly 2(√(1 + ζ²) − ζ) (its step matrix on
+/// x'' = −ω²x − 2ζωx' has trace 2 − (hω)² − 2ζhω and determinant 1 − 2ζhω), and widens forward
+/// Euler's from nothing to about 2ζ.
+#[test]
+fn damping_moves_the_stability_limits() {
+    for zeta in [0.1f64, 0.3, 0.7, 1.5] {
+        let exact = 2.0 * ((1.0 + zeta * zeta).sqrt() - zeta);
+        let measured = damped_stability_limit(Integrator::SymplecticEuler, zeta);
+        assert!((measured - exact).abs() < 2e-3, "ζ = {zeta}: {measured} against {exact}");
+        let forward = damped_stability_limit(Integrator::ForwardEuler, zeta);
+        assert!(forward > 0.5 * zeta && forward <= 2.0 * zeta + 2e-3, "ζ = {zeta}: forward Euler {forward}");
+    }
+    assert_eq!(
+        damped_stability_limit(Integrator::SymplecticEuler, 0.0),
+        stability_limit(Integrator::SymplecticEuler)
+    );
 }
 
 #[test]

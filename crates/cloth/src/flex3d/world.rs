@@ -9,6 +9,7 @@ use super::desc::{
 };
 use super::forces::{SurfaceForces, acceleration_with_friction, add_bending_forces, add_spring_forces};
 use super::solve_contact::{StaticContacts, THICKNESS_OF_SPACING};
+use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
 use crate::contact_mode::ContactMode;
 use crate::self_collision::{SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats};
 use anima_geom::self_contact::point_triangle_proximity;
@@ -38,6 +39,9 @@ pub struct NonFiniteError {
 pub enum StepError {
     #[error(transparent)]
     NonFinite(#[from] NonFiniteError),
+    /// The state left its physical bounds ([`crate::bounds`]).
+    #[error(transparent)]
+    Diverged(#[from] OutOfBounds),
     #[error("step {step} (t = {time} s): {source}")]
     Solver { step: usize, time: f64, source: anima_ode::OdeError },
 }
@@ -420,6 +424,10 @@ pub struct Flex3dWorld {
     touched: Vec<bool>,
     /// The modern response between surfaces (`SelfCollisionMode::Modern`), when the scene asks for it.
     modern: Option<ModernSelfCollision>,
+    /// The physical bounds every step is checked against, and the surfaces' row and column neighbours
+    /// with their rest spacing (the springs whose strain is bounded).
+    bounds: BoundsWatch,
+    bounded_springs: Vec<(u32, u32, f64)>,
 }
 
 /// What the modern self-collision response of a world keeps: its settings, every surface's triangles
@@ -573,7 +581,37 @@ impl Flex3dWorld {
             }
             colliders.boxes.resize(colliders.corners.len(), Aabb::EMPTY);
         }
+        // FLEX3D scenes are driven (wind, translated points) and their soft springs stretch far in the
+        // thesis's own scenes (the sail of E-5 to 11 times its rest spacing, the cardboard and the
+        // paper to 3 times): only the speed is bounded by default. The speed a particle can be given: a
+        // fall through the scene under the strongest body force (gravity and wind, per unit mass), plus
+        // the fastest translation.
+        let acceleration = model.surfaces.iter().map(|f| f.body_force.length() / f.mass).fold(0.0, f64::max);
+        let driven = windows
+            .iter()
+            .flatten()
+            .map(|w: &StepWindow| w.per_frame.length() * scene.frame_rate_hz)
+            .fold(0.0, f64::max);
+        let at_rest = vec![DVec3::ZERO; n];
+        let defaults = Defaults { acceleration, driven, passive: false, max_strain: f64::INFINITY };
+        let bounds = BoundsWatch::new(defaults, &x, &at_rest, &mass, scene.gravity_m_s2, 0.0);
+        let mut bounded_springs = Vec::new();
+        for s in &surfaces {
+            for i in 0..s.rows {
+                for j in 0..s.cols {
+                    let p = (s.offset + i * s.cols + j) as u32;
+                    if j + 1 < s.cols {
+                        bounded_springs.push((p, p + 1, s.spacing));
+                    }
+                    if i + 1 < s.rows {
+                        bounded_springs.push((p, p + s.cols as u32, s.spacing));
+                    }
+                }
+            }
+        }
         Ok(Self {
+            bounds,
+            bounded_springs,
             stepper: Stepper::new(scene.integrator, n),
             model,
             next: State::new(x.clone(), vec![DVec3::ZERO; n]),
@@ -676,6 +714,10 @@ impl Flex3dWorld {
     /// With `ModelOptions::object_contact` = `InSolve`, contacts with static objects are constrained inside the
     /// implicit step instead, and the collision pass tests the surfaces only.
     pub fn step(&mut self) -> Result<(), StepError> {
+        if self.step == 0 {
+            // The bounds are taken from the state the run starts from.
+            self.bounds.restart(&self.now.x, &self.now.v, &self.mass, DVec3::ZERO, 0.0);
+        }
         let t = self.time();
         let in_solve = self.options.object_contact == ContactMode::InSolve
             && self.options.collisions
@@ -730,7 +772,31 @@ impl Flex3dWorld {
         }
         std::mem::swap(&mut self.now, &mut self.next);
         self.step += 1;
-        Ok(self.check_finite()?)
+        self.check_finite()?;
+        let gravity = DVec3::ZERO;
+        let springs = self.bounded_springs.iter().copied();
+        Ok(self.bounds.check(
+            self.step as u64,
+            self.time(),
+            &self.now.x,
+            &self.now.v,
+            &self.mass,
+            gravity,
+            springs,
+        )?)
+    }
+
+    /// The physical bounds every step is checked against ([`crate::bounds`]: speed and strain, by
+    /// default [`Bounds::for_start`] of the scene with its strongest body force and fastest translation).
+    pub fn bounds(&self) -> Bounds {
+        self.bounds.bounds
+    }
+
+    /// Sets the bounds (the energy bound does not apply to FLEX3D's driven scenes); [`Bounds::unbounded`]
+    /// checks finiteness only.
+    pub fn set_bounds(&mut self, bounds: Bounds) {
+        let bounds = Bounds { energy_factor: None, ..bounds };
+        self.bounds.set(bounds, &self.now.x, &self.now.v, &self.mass, DVec3::ZERO, 0.0);
     }
 
     /// Pinned particles: x̃ = x + u·Δt, ṽ = u with u the sum of active translation velocities (spec S3.6).

@@ -127,6 +127,14 @@ impl BendingMode {
         u.map(|ui| ui * c)
     }
 
+    /// The unit mean of the two face normals, along which a flat element's mode points (u₁ and u₂ are
+    /// along the face normals); the first face's normal when the element is folded flat onto itself.
+    #[inline]
+    pub fn mean_normal(&self) -> DVec3 {
+        let (n1, n2) = (self.u[0].normalize_or_zero(), self.u[1].normalize_or_zero());
+        (n1 + n2).try_normalize().unwrap_or(n1)
+    }
+
     /// The coefficients of the element's force Jacobians in the mode: ∂f_a/∂x_b ≈ −k_x u_a u_bᵀ and
     /// ∂f_a/∂v_b = −k_v u_a u_bᵀ, returned as (k_x, k_v). Since u = −∂θ/∂x, the elastic force
     /// f_a = K sin(θ/2) u_a (K = k |e|²/(|N₁| + |N₂|)) has the Gauss–Newton Jacobian

@@ -4,15 +4,22 @@
 //! Each element's box encloses its positions at the start and at the end of the step (a vertex moving
 //! linearly stays inside the box of its two ends, and so does every point of an edge or triangle whose
 //! corners move linearly), grown by half the thickness, so two elements that come within the thickness
-//! of each other at any time of the step have overlapping boxes. The boxes of triangles and of edges
-//! go into two [`Bvh`]s built when the topology changes and refitted on every other step; each vertex
-//! queries the triangle tree and each edge the edge tree. Pairs that share a vertex are skipped: they
-//! touch by construction, and keeping them apart is the cloth's own springs' job.
+//! of each other at any time of the step have overlapping boxes. Pairs that share a vertex are skipped:
+//! they touch by construction, and keeping them apart is the cloth's own springs' job.
+//!
+//! The triangles go into one tree ([`super::patch_tree`]), built when the topology changes and refitted
+//! every step, whose nodes also know the cone of their normals over the step. The tree is walked
+//! against itself, pairs of nodes whose boxes overlap, and a node that is one edge-connected piece of
+//! cloth staying nearly flat over the step is not looked into at all: most of a draped or falling
+//! cloth is such pieces, and the pairs of neighbouring elements inside them, whose boxes overlap
+//! wherever the cloth is, were most of the work. From each pair of triangles whose boxes overlap come
+//! the pairs of their features; every vertex and every edge belongs to one triangle (the first that
+//! has it), and a feature is only paired from its own triangle, so each pair is listed once.
 
 use glam::DVec3;
 
-use super::bvh::Bvh;
 use super::crossings::unique_edges_into;
+use super::patch_tree::{PatchTree, Visitor};
 use crate::Aabb;
 
 /// A vertex and a triangle (not one of its corners) whose swept boxes overlap.
@@ -30,7 +37,7 @@ pub struct EdgeEdgePair {
     pub edges: [[u32; 2]; 2],
 }
 
-/// Candidate pairs for self-contact over one step, with the trees and buffers kept between steps so
+/// Candidate pairs for self-contact over one step, with the tree and buffers kept between steps so
 /// that [`SelfContactBroadPhase::update`] allocates nothing once the buffers have grown to the mesh.
 ///
 /// ```
@@ -48,91 +55,231 @@ pub struct EdgeEdgePair {
 pub struct SelfContactBroadPhase {
     triangles: Vec<[u32; 3]>,
     edges: Vec<[u32; 2]>,
-    triangle_tree: Bvh,
-    edge_tree: Bvh,
-    /// Swept vertex boxes, for [`SelfContactBroadPhase::update_moved`]'s queries from the triangles.
-    vertex_tree: Bvh,
+    /// Per triangle, the corners (bit k: corner k) and the edges (bit k: corner k to corner k + 1)
+    /// that belong to it.
+    own_corners: Vec<u8>,
+    own_edges: Vec<u8>,
+    /// Vertices of no triangle (particles beside the surface), paired by a query of their own.
+    loose: Vec<u32>,
     stack: Vec<u32>,
+    tree: PatchTree,
+    /// Swept vertex boxes grown by half the thickness, and the triangles' boxes (their unions).
+    vertex_boxes: Vec<Aabb>,
+    triangle_boxes: Vec<Aabb>,
     vertex_triangle: Vec<VertexTrianglePair>,
     edge_edge: Vec<EdgeEdgePair>,
     rebuild: bool,
+    /// Whether flat, connected pieces are skipped (on unless turned off for a check against the pairs of
+    /// every box overlap).
+    no_flat_pieces: bool,
+}
+
+/// The pairs found for a pair of leaves, with the broad phase's borrowed state.
+struct Collect<'a> {
+    triangles: &'a [[u32; 3]],
+    order: &'a [u32],
+    own_corners: &'a [u8],
+    own_edges: &'a [u8],
+    vertex_boxes: &'a [Aabb],
+    triangle_boxes: &'a [Aabb],
+    moved: Option<&'a [bool]>,
+    vertex_triangle: &'a mut Vec<VertexTrianglePair>,
+    edge_edge: &'a mut Vec<EdgeEdgePair>,
+}
+
+impl Collect<'_> {
+    fn pair(&mut self, t1: u32, t2: u32) {
+        let (a, b) = (self.triangles[t1 as usize], self.triangles[t2 as usize]);
+        if !self.triangle_boxes[t1 as usize].overlaps(&self.triangle_boxes[t2 as usize]) {
+            return;
+        }
+        let moved = |ids: &[u32]| self.moved.is_none_or(|m| ids.iter().any(|&i| m[i as usize]));
+        // Corners of one triangle against the other.
+        for (own, tri, other, t_other) in
+            [(self.own_corners[t1 as usize], a, b, t2), (self.own_corners[t2 as usize], b, a, t1)]
+        {
+            for (k, &v) in tri.iter().enumerate() {
+                if own & (1 << k) == 0 || other.contains(&v) {
+                    continue;
+                }
+                if self.vertex_boxes[v as usize].overlaps(&self.triangle_boxes[t_other as usize])
+                    && moved(&[v, other[0], other[1], other[2]])
+                {
+                    self.vertex_triangle.push(VertexTrianglePair { vertex: v, triangle: t_other });
+                }
+            }
+        }
+        // Edges of one against edges of the other.
+        let (ea, eb) = (self.own_edges[t1 as usize], self.own_edges[t2 as usize]);
+        if ea == 0 || eb == 0 {
+            return;
+        }
+        for k in 0..3 {
+            if ea & (1 << k) == 0 {
+                continue;
+            }
+            let e = [a[k], a[(k + 1) % 3]];
+            let box_e = self.vertex_boxes[e[0] as usize].union(self.vertex_boxes[e[1] as usize]);
+            for l in 0..3 {
+                if eb & (1 << l) == 0 {
+                    continue;
+                }
+                let f = [b[l], b[(l + 1) % 3]];
+                if f.contains(&e[0]) || f.contains(&e[1]) {
+                    continue;
+                }
+                let box_f = self.vertex_boxes[f[0] as usize].union(self.vertex_boxes[f[1] as usize]);
+                if box_e.overlaps(&box_f) && moved(&[e[0], e[1], f[0], f[1]]) {
+                    let (e, f) = ([e[0].min(e[1]), e[0].max(e[1])], [f[0].min(f[1]), f[0].max(f[1])]);
+                    self.edge_edge.push(EdgeEdgePair { edges: if e < f { [e, f] } else { [f, e] } });
+                }
+            }
+        }
+    }
+}
+
+impl Visitor for Collect<'_> {
+    fn leaves(&mut self, a: std::ops::Range<usize>, b: std::ops::Range<usize>) {
+        let same = a == b;
+        for i in a {
+            let b = if same { i + 1..b.end } else { b.clone() };
+            for j in b {
+                self.pair(self.order[i], self.order[j]);
+            }
+        }
+    }
 }
 
 impl SelfContactBroadPhase {
-    /// An empty broad phase; the first [`update`](Self::update) builds its trees.
+    /// An empty broad phase; the first [`update`](Self::update) builds its tree.
     pub fn new() -> Self {
         Self { rebuild: true, ..Self::default() }
     }
 
-    /// The swept boxes of the step, grown by half the thickness, and the trees over them (rebuilt when
-    /// the triangles changed, refitted otherwise).
-    fn fit(&mut self, triangles: &[[u32; 3]], start: &[DVec3], end: &[DVec3], thickness: f64) {
+    /// Turns off the skipping of flat, connected pieces: every pair of elements whose boxes overlap is
+    /// then listed (what tests compare the tree's pairs with).
+    pub fn list_every_overlap(&mut self) {
+        self.no_flat_pieces = true;
+    }
+
+    /// The swept boxes of the step, grown by half the thickness, and the tree over them (rebuilt when the
+    /// triangles changed, refitted otherwise), with the triangles that hold a moved vertex marked.
+    fn fit(
+        &mut self,
+        triangles: &[[u32; 3]],
+        start: &[DVec3],
+        end: &[DVec3],
+        thickness: f64,
+        moved: Option<&[bool]>,
+    ) {
         assert_eq!(start.len(), end.len(), "start and end positions must have one entry per vertex");
         assert!(thickness >= 0.0 && thickness.is_finite(), "thickness must be finite and non-negative");
         if self.triangles != triangles {
             self.triangles.clear();
             self.triangles.extend_from_slice(triangles);
             unique_edges_into(triangles, &mut self.edges);
+            self.assign_features(start.len());
             self.rebuild = true;
         }
         let pad = 0.5 * thickness;
-        let swept = |i: u32| [start[i as usize], end[i as usize]];
-        self.triangle_tree.boxes.clear();
-        self.triangle_tree.boxes.extend(self.triangles.iter().map(|t| {
-            let [[a0, a1], [b0, b1], [c0, c1]] = t.map(swept);
-            grown(Aabb::from_points([a0, a1, b0, b1, c0, c1]), pad)
-        }));
-        self.edge_tree.boxes.clear();
-        self.edge_tree.boxes.extend(self.edges.iter().map(|e| {
-            let [[a0, a1], [b0, b1]] = e.map(swept);
-            grown(Aabb::from_points([a0, a1, b0, b1]), pad)
-        }));
-        self.vertex_tree.boxes.clear();
-        self.vertex_tree
-            .boxes
+        self.vertex_boxes.clear();
+        self.vertex_boxes
             .extend(start.iter().zip(end).map(|(&x0, &x1)| grown(Aabb::from_points([x0, x1]), pad)));
-        if self.rebuild {
-            self.triangle_tree.build();
-            self.edge_tree.build();
-            self.vertex_tree.build();
+        self.triangle_boxes.clear();
+        let boxes = &self.vertex_boxes;
+        self.triangle_boxes.extend(
+            self.triangles
+                .iter()
+                .map(|t| boxes[t[0] as usize].union(boxes[t[1] as usize]).union(boxes[t[2] as usize])),
+        );
+        if self.rebuild || self.tree.is_empty() != self.triangles.is_empty() {
+            self.tree.build(&self.triangle_boxes, &self.triangles);
             self.rebuild = false;
-        } else {
-            self.triangle_tree.refit();
-            self.edge_tree.refit();
-            self.vertex_tree.refit();
+        }
+        self.tree.refit(&self.triangle_boxes, &self.triangles, start, end, moved);
+    }
+
+    /// Each vertex and edge belongs to the first triangle that has it.
+    fn assign_features(&mut self, n_vertices: usize) {
+        self.own_corners.clear();
+        self.own_corners.resize(self.triangles.len(), 0);
+        self.own_edges.clear();
+        self.own_edges.resize(self.triangles.len(), 0);
+        let mut vertex_taken = vec![false; n_vertices];
+        self.loose.clear();
+        let mut edge_taken = std::collections::HashSet::with_capacity(self.edges.len());
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let v = tri[k] as usize;
+                if !vertex_taken[v] {
+                    vertex_taken[v] = true;
+                    self.own_corners[t] |= 1 << k;
+                }
+                let (i, j) = (tri[k], tri[(k + 1) % 3]);
+                if i != j && edge_taken.insert([i.min(j), i.max(j)]) {
+                    self.own_edges[t] |= 1 << k;
+                }
+            }
+        }
+        self.loose.extend((0..n_vertices as u32).filter(|&v| !vertex_taken[v as usize]));
+    }
+
+    fn collect(&mut self, moved: Option<&[bool]>) {
+        let mut collect = Collect {
+            triangles: &self.triangles,
+            order: &self.tree.order,
+            own_corners: &self.own_corners,
+            own_edges: &self.own_edges,
+            vertex_boxes: &self.vertex_boxes,
+            triangle_boxes: &self.triangle_boxes,
+            moved,
+            vertex_triangle: &mut self.vertex_triangle,
+            edge_edge: &mut self.edge_edge,
+        };
+        self.tree.self_pairs(moved.is_some(), !self.no_flat_pieces, &mut collect);
+        // Vertices of no triangle against the triangles their boxes meet.
+        for &v in &self.loose {
+            let query = self.vertex_boxes[v as usize];
+            let moved_v = moved.is_some_and(|m| m[v as usize]);
+            let (triangles, order, boxes) = (&self.triangles, &self.tree.order, &self.triangle_boxes);
+            let pairs = &mut self.vertex_triangle;
+            self.tree.query(&query, moved.is_some() && !moved_v, &mut self.stack, |slots| {
+                for slot in slots {
+                    let t = order[slot];
+                    let tri = triangles[t as usize];
+                    let any_moved = moved.is_none_or(|m| moved_v || tri.iter().any(|&i| m[i as usize]));
+                    if !tri.contains(&v) && boxes[t as usize].overlaps(&query) && any_moved {
+                        pairs.push(VertexTrianglePair { vertex: v, triangle: t });
+                    }
+                }
+            });
         }
     }
 
     /// Finds the candidate pairs of the step that moves vertex i linearly from `start[i]` to `end[i]`,
     /// for cloth of the given thickness (m): every vertex–triangle and edge–edge pair without a shared
-    /// vertex that comes within `thickness` during the step is among them.
+    /// vertex that comes within `thickness` during the step is among them, except those inside a piece
+    /// of cloth that stays nearly flat over the step (module docs), which cannot.
     ///
-    /// The trees are rebuilt when `triangles` differs from the previous call's (remeshing) or after
+    /// The tree is rebuilt when `triangles` differs from the previous call's (remeshing) or after
     /// [`request_rebuild`](Self::request_rebuild), and refitted otherwise.
     ///
     /// # Panics
     /// If `start` and `end` differ in length, a triangle names a vertex outside them, or the thickness
     /// is negative or not finite.
     pub fn update(&mut self, triangles: &[[u32; 3]], start: &[DVec3], end: &[DVec3], thickness: f64) {
-        self.fit(triangles, start, end, thickness);
+        self.fit(triangles, start, end, thickness, None);
         self.vertex_triangle.clear();
-        for v in 0..start.len() as u32 {
-            self.query_vertex(v);
-        }
-
         self.edge_edge.clear();
-        for e in 0..self.edges.len() {
-            self.query_edge(e, |_, f| f > e);
-        }
+        self.collect(None);
     }
 
     /// The candidate pairs of a step whose trajectories differ from the previous update's only at the
     /// vertices marked in `moved` (and the thickness may differ): the pairs with at least one moved
-    /// vertex, found by querying from the moved vertices, the triangles and the edges that hold one.
-    /// With `keep`, the previous update's pairs without a moved vertex stay too (their swept boxes have
-    /// not changed, so they are still candidates when the thickness has not grown); without it, only
-    /// the new pairs are listed — what a pass needs that has already tested the others on the same
-    /// trajectories. Every pair is listed once; the trees are refitted.
+    /// vertex, found by walking the tree only where a node holds one. With `keep`, the previous update's
+    /// pairs without a moved vertex stay too (their swept boxes have not changed, so they are still
+    /// candidates when the thickness has not grown); without it, only the new pairs are listed — what a
+    /// pass needs that has already tested the others on the same trajectories. Every pair is listed once.
     ///
     /// # Panics
     /// If the triangles are not the previous update's, or as [`update`](Self::update).
@@ -150,8 +297,7 @@ impl SelfContactBroadPhase {
             "update_moved follows an update of the same mesh"
         );
         assert_eq!(moved.len(), start.len(), "one flag per vertex");
-        self.fit(triangles, start, end, thickness);
-        let moved_edge = |edges: &[[u32; 2]], e: usize| edges[e].iter().any(|&i| moved[i as usize]);
+        self.fit(triangles, start, end, thickness, Some(moved));
         if keep {
             let tris = &self.triangles;
             let moved_triangle = |t: u32| tris[t as usize].iter().any(|&i| moved[i as usize]);
@@ -161,61 +307,11 @@ impl SelfContactBroadPhase {
             self.vertex_triangle.clear();
             self.edge_edge.clear();
         }
-        for v in 0..start.len() as u32 {
-            if moved[v as usize] {
-                self.query_vertex(v);
-            }
-        }
-        // A triangle with a moved corner meets the vertices that did not move (the moved ones found it).
-        for t in 0..self.triangles.len() as u32 {
-            let corners = self.triangles[t as usize];
-            if !corners.iter().any(|&i| moved[i as usize]) {
-                continue;
-            }
-            let query = self.triangle_tree.boxes[t as usize];
-            let pairs = &mut self.vertex_triangle;
-            self.vertex_tree.query(&query, &mut self.stack, |vertex| {
-                if !moved[vertex as usize] && !corners.contains(&vertex) {
-                    pairs.push(VertexTrianglePair { vertex, triangle: t });
-                }
-            });
-        }
-        for e in 0..self.edges.len() {
-            if moved_edge(&self.edges, e) {
-                // A pair of two moved edges is listed from the one with the smaller index.
-                self.query_edge(e, |edges, f| f > e || !moved_edge(edges, f));
-            }
-        }
+        self.collect(Some(moved));
     }
 
-    /// Lists the triangles whose boxes overlap vertex `v`'s, not holding it.
-    fn query_vertex(&mut self, vertex: u32) {
-        let query = self.vertex_tree.boxes[vertex as usize];
-        let (triangles, pairs) = (&self.triangles, &mut self.vertex_triangle);
-        self.triangle_tree.query(&query, &mut self.stack, |t| {
-            if !triangles[t as usize].contains(&vertex) {
-                pairs.push(VertexTrianglePair { vertex, triangle: t });
-            }
-        });
-    }
-
-    /// Lists the edges whose boxes overlap edge `e`'s, share no vertex with it and pass `accept`
-    /// (given the edge list and the other edge's index), as pairs ordered by index.
-    fn query_edge(&mut self, e: usize, accept: impl Fn(&[[u32; 2]], usize) -> bool) {
-        let query = self.edge_tree.boxes[e];
-        let edge = self.edges[e];
-        let (edges, pairs) = (&self.edges, &mut self.edge_edge);
-        self.edge_tree.query(&query, &mut self.stack, |f| {
-            let other = edges[f as usize];
-            if accept(edges, f as usize) && !other.contains(&edge[0]) && !other.contains(&edge[1]) {
-                let (first, second) = if (f as usize) > e { (edge, other) } else { (other, edge) };
-                pairs.push(EdgeEdgePair { edges: [first, second] });
-            }
-        });
-    }
-
-    /// Makes the next [`update`](Self::update) rebuild the trees instead of refitting them: worth
-    /// doing now and then when the cloth has deformed so much that the refitted boxes overlap widely.
+    /// Makes the next [`update`](Self::update) rebuild the tree instead of refitting it: worth doing
+    /// now and then when the cloth has deformed so much that the refitted boxes overlap widely.
     pub fn request_rebuild(&mut self) {
         self.rebuild = true;
     }
@@ -278,11 +374,11 @@ mod tests {
             [
                 (b.triangles.as_ptr() as usize, b.triangles.capacity()),
                 (b.edges.as_ptr() as usize, b.edges.capacity()),
-                (b.stack.as_ptr() as usize, b.stack.capacity()),
+                (b.vertex_boxes.as_ptr() as usize, b.vertex_boxes.capacity()),
                 (b.vertex_triangle.as_ptr() as usize, b.vertex_triangle.capacity()),
                 (b.edge_edge.as_ptr() as usize, b.edge_edge.capacity()),
-                (b.triangle_tree.boxes.as_ptr() as usize, b.triangle_tree.boxes.capacity()),
-                (b.edge_tree.boxes.as_ptr() as usize, b.edge_tree.boxes.capacity()),
+                (b.triangle_boxes.as_ptr() as usize, b.triangle_boxes.capacity()),
+                (b.tree.order.as_ptr() as usize, b.tree.order.capacity()),
             ]
         };
         let warm = fingerprint(&broad);

@@ -1,11 +1,9 @@
-//! A bounding-volume hierarchy of axis-aligned boxes, built by median splits and refitted in place.
+//! A bounding-volume hierarchy of axis-aligned boxes, built by median splits (the crossing count's; the
+//! broad phase keeps a tree of its own with normal cones, [`super::patch_tree`]).
 //!
-//! Cloth keeps its topology for many steps while its vertices move a little each step, so the tree is
-//! built once (median split of box centres along the widest axis, at most [`LEAF_SIZE`] boxes per
-//! leaf) and afterwards only refitted: the boxes are recomputed bottom-up over the same tree in O(n).
-//! Nodes are stored so that children come after their parent, which makes the refit one reverse sweep.
-//! Every buffer is kept between calls, so neither building nor refitting nor querying allocates once
-//! the capacities have grown to the mesh.
+//! Median split of box centres along the widest axis, at most [`LEAF_SIZE`] boxes per leaf, children
+//! stored after their parent. Every buffer is kept between calls, so neither building nor querying
+//! allocates once the capacities have grown to the mesh.
 
 use crate::Aabb;
 
@@ -27,7 +25,7 @@ pub(crate) struct Bvh {
     nodes: Vec<Node>,
     /// Box indices in leaf order.
     order: Vec<u32>,
-    /// One box per item, filled by the caller before [`Bvh::build`] or [`Bvh::refit`].
+    /// One box per item, filled by the caller before [`Bvh::build`].
     pub boxes: Vec<Aabb>,
     build_stack: Vec<(u32, u32, u32)>,
 }
@@ -80,23 +78,6 @@ impl Bvh {
         }
     }
 
-    /// Recomputes every node's box from `self.boxes`, keeping the tree. The boxes must be as many as
-    /// when the tree was built.
-    pub fn refit(&mut self) {
-        debug_assert_eq!(self.boxes.len(), self.order.len(), "refit needs the item count of the build");
-        for k in (0..self.nodes.len()).rev() {
-            let Node { first, count, .. } = self.nodes[k];
-            let aabb = if count > 0 {
-                self.order[first as usize..(first + count) as usize]
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, &i| b.union(self.boxes[i as usize]))
-            } else {
-                self.nodes[first as usize].aabb.union(self.nodes[first as usize + 1].aabb)
-            };
-            self.nodes[k].aabb = aabb;
-        }
-    }
-
     /// Calls `visit` with every item whose box overlaps `query` (closed boxes: touching counts), in a
     /// deterministic order. `stack` is scratch space the caller keeps.
     #[inline]
@@ -144,20 +125,11 @@ mod tests {
     }
 
     #[test]
-    fn query_matches_brute_force_after_build_and_after_refit() {
+    fn query_matches_brute_force() {
         let mut bvh = Bvh { boxes: boxes(200, 0.0), ..Bvh::default() };
         bvh.build();
         let mut stack = Vec::new();
         let queries = boxes(200, 0.3);
-        for q in &queries {
-            let mut found = Vec::new();
-            bvh.query(q, &mut stack, |i| found.push(i));
-            found.sort_unstable();
-            assert_eq!(found, brute(&bvh.boxes, q));
-        }
-        // Move every box and refit: the same tree must still find exactly the overlaps.
-        bvh.boxes = boxes(200, 1.7).into_iter().rev().collect();
-        bvh.refit();
         for q in &queries {
             let mut found = Vec::new();
             bvh.query(q, &mut stack, |i| found.push(i));
@@ -170,7 +142,6 @@ mod tests {
     fn empty_tree_finds_nothing() {
         let mut bvh = Bvh::default();
         bvh.build();
-        bvh.refit();
         bvh.query(&Aabb { min: DVec3::splat(-1.0), max: DVec3::ONE }, &mut Vec::new(), |_| {
             panic!("no boxes")
         });

@@ -42,14 +42,41 @@ pub struct EdgeTriangleCrossing {
 /// If a triangle names a vertex outside `vertices`.
 pub fn count_self_intersections(vertices: &[DVec3], triangles: &[[u32; 3]]) -> usize {
     let mut n = 0;
-    for_each_crossing(vertices, triangles, |_| n += 1);
+    for_each_crossing(vertices, triangles, usize::MAX, |_| n += 1).expect("no budget");
     n
+}
+
+/// Candidate (edge, triangle) pairs per edge that [`count_self_intersections_within`]'s default budget
+/// allows: a cloth, folded or resting in layers, has a few dozen per edge (boxes of neighbouring
+/// elements overlap); a mesh whose edges span the scene, as after a blow-up, has as many as it has
+/// triangles.
+pub const CROSSING_CANDIDATES_PER_EDGE: usize = 256;
+
+/// The count was abandoned: more (edge, triangle) box overlaps than the budget allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("the crossing count gave up after {candidates} candidate pairs (the mesh is tangled or exploded)")]
+pub struct CountAbandoned {
+    pub candidates: usize,
+}
+
+/// [`count_self_intersections`] with a bound on its work: at most `budget` candidate (edge, triangle)
+/// pairs tested (`None`: [`CROSSING_CANDIDATES_PER_EDGE`] per edge of the mesh), so that a mesh whose
+/// boxes all overlap (a run that exploded) costs a bounded time instead of a quadratic one.
+pub fn count_self_intersections_within(
+    vertices: &[DVec3],
+    triangles: &[[u32; 3]],
+    budget: Option<usize>,
+) -> Result<usize, CountAbandoned> {
+    let budget = budget.unwrap_or(CROSSING_CANDIDATES_PER_EDGE * 3 * triangles.len());
+    let mut n = 0;
+    for_each_crossing(vertices, triangles, budget, |_| n += 1)?;
+    Ok(n)
 }
 
 /// The crossing pairs [`count_self_intersections`] counts, ordered by edge, then triangle.
 pub fn self_intersections(vertices: &[DVec3], triangles: &[[u32; 3]]) -> Vec<EdgeTriangleCrossing> {
     let mut crossings = Vec::new();
-    for_each_crossing(vertices, triangles, |c| crossings.push(c));
+    for_each_crossing(vertices, triangles, usize::MAX, |c| crossings.push(c)).expect("no budget");
     crossings.sort_unstable();
     crossings
 }
@@ -82,11 +109,13 @@ pub(crate) fn unique_edges_into(triangles: &[[u32; 3]], edges: &mut Vec<[u32; 2]
     edges.dedup();
 }
 
+/// Calls `found` with every crossing, testing at most `budget` candidate pairs.
 fn for_each_crossing(
     vertices: &[DVec3],
     triangles: &[[u32; 3]],
+    budget: usize,
     mut found: impl FnMut(EdgeTriangleCrossing),
-) {
+) -> Result<(), CountAbandoned> {
     let corners = |t: [u32; 3]| t.map(|i| vertices[i as usize]);
     let mut tree = Bvh::default();
     tree.boxes.extend(triangles.iter().map(|&t| Aabb::from_points(corners(t))));
@@ -94,9 +123,14 @@ fn for_each_crossing(
     let mut edges = Vec::new();
     unique_edges_into(triangles, &mut edges);
     let mut stack = Vec::new();
+    let mut candidates = 0usize;
     for &edge in &edges {
+        if candidates > budget {
+            return Err(CountAbandoned { candidates });
+        }
         let [a, b] = edge.map(|i| vertices[i as usize]);
         tree.query(&Aabb::from_points([a, b]), &mut stack, |t| {
+            candidates += 1;
             let tri = triangles[t as usize];
             if !tri.contains(&edge[0])
                 && !tri.contains(&edge[1])
@@ -106,6 +140,7 @@ fn for_each_crossing(
             }
         });
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -45,6 +45,7 @@ mod bvh;
 mod ccd;
 mod crossings;
 mod orient;
+mod patch_tree;
 mod proximity;
 #[cfg(test)]
 mod tests;
@@ -52,7 +53,8 @@ mod tests;
 pub use broad_phase::{EdgeEdgePair, SelfContactBroadPhase, VertexTrianglePair};
 pub use ccd::{EdgeEdgeImpact, VertexTriangleImpact, edge_edge_impact, vertex_triangle_impact};
 pub use crossings::{
-    EdgeTriangleCrossing, count_self_intersections, segment_crosses_triangle, self_intersections,
+    CROSSING_CANDIDATES_PER_EDGE, CountAbandoned, EdgeTriangleCrossing, count_self_intersections,
+    count_self_intersections_within, segment_crosses_triangle, self_intersections,
 };
 pub use orient::orient3d;
 pub use proximity::{

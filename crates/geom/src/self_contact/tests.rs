@@ -35,15 +35,20 @@ fn swept(x0: &[DVec3], x1: &[DVec3], ids: &[u32], thickness: f64) -> Aabb {
     Aabb { min: b.min - r, max: b.max + r }
 }
 
+/// With every box overlap listed, the candidates are exactly brute force's; with flat, connected
+/// pieces skipped (the default), every impact brute force finds is still among them.
 #[test]
 fn broad_and_narrow_phase_match_brute_force_on_random_meshes() {
     let mut rng = ChaCha8Rng::seed_from_u64(16);
     let mut broad = SelfContactBroadPhase::new();
+    broad.list_every_overlap();
+    let mut culled = SelfContactBroadPhase::new();
     let (mut n_vt_hits, mut n_ee_hits) = (0, 0);
     for case in 0..400 {
         let (triangles, x0, x1) = random_step(&mut rng);
         let thickness = [0.0, 0.01, 0.1][case % 3];
         broad.update(&triangles, &x0, &x1, thickness);
+        culled.update(&triangles, &x0, &x1, thickness);
         let vt = |v: u32, t: u32| {
             let [a, b, c] = triangles[t as usize].map(|i| i as usize);
             let v = v as usize;
@@ -78,6 +83,8 @@ fn broad_and_narrow_phase_match_brute_force_on_random_meshes() {
             got.iter().copied().filter(|p| vt(p.vertex, p.triangle).is_some()).collect();
         narrow_vt.sort_unstable();
         assert_eq!(narrow_vt, hits_vt, "vertex–triangle impacts, case {case}");
+        let kept: std::collections::HashSet<_> = culled.vertex_triangle_pairs().iter().copied().collect();
+        assert!(hits_vt.iter().all(|p| kept.contains(p)), "a vertex–triangle impact skipped, case {case}");
         n_vt_hits += hits_vt.len();
 
         let edges = broad.edges();
@@ -103,6 +110,12 @@ fn broad_and_narrow_phase_match_brute_force_on_random_meshes() {
         let mut narrow_ee: Vec<_> = got.iter().copied().filter(|p| ee(p.edges).is_some()).collect();
         narrow_ee.sort_unstable();
         assert_eq!(narrow_ee, hits_ee, "edge–edge impacts, case {case}");
+        let kept: std::collections::HashSet<_> = culled.edge_edge_pairs().iter().copied().collect();
+        assert!(
+            hits_ee.iter().all(|p| kept.contains(p)),
+            "an edge–edge impact skipped, case {case}: {:?} of {triangles:?}\nx0 {x0:?}\nx1 {x1:?}",
+            hits_ee.iter().find(|p| !kept.contains(p))
+        );
         n_ee_hits += hits_ee.len();
     }
     // The comparison means something only if contacts happened.
@@ -187,4 +200,81 @@ fn sheet_at_20_m_s_through_a_thin_slab_is_caught_though_the_end_state_is_clean()
             assert!((first_hit[v] - want).abs() < 1e-12, "vertex {v} at {p}: first hit {}", first_hit[v]);
         }
     }
+}
+
+/// A manifold sheet folding onto itself over a step, in many random folds: the broad phase that skips
+/// flat, connected pieces keeps every impact brute force finds; a flat sheet falling with a ripple gives
+/// no candidate at all, and the folding ones far fewer than every box overlap.
+#[test]
+fn skipping_flat_pieces_loses_no_impact_of_a_folding_sheet() {
+    use crate::{DiagonalPattern, MaterialMesh};
+    let mesh = MaterialMesh::grid(10, 1.0, DiagonalPattern::Alternating).unwrap();
+    let flat = mesh.place(DVec3::ZERO, DVec3::X, DVec3::Y);
+    let triangles = mesh.triangles();
+    let mut rng = ChaCha8Rng::seed_from_u64(37);
+    let (mut hits, mut culled_pairs, mut all_pairs) = (0, 0, 0);
+    for case in 0..60 {
+        // Folded about x = fold by an angle near 180°, then moved on by a little more folding and noise.
+        let fold = rng.random_range(0.3..0.7);
+        let (a0, a1) = (rng.random_range(2.6..3.1f64), rng.random_range(3.0..3.3f64));
+        let shape = |angle: f64, lift: f64| -> Vec<DVec3> {
+            flat.iter()
+                .map(|p| {
+                    if p.x <= fold {
+                        *p
+                    } else {
+                        let r = p.x - fold;
+                        DVec3::new(fold + r * angle.cos(), p.y, r * angle.sin() + lift)
+                    }
+                })
+                .collect()
+        };
+        let x0 = shape(a0, 0.02);
+        let x1: Vec<DVec3> = shape(a1, -0.01)
+            .into_iter()
+            .map(|p| p + DVec3::new(rng.random_range(-1e-3..1e-3), rng.random_range(-1e-3..1e-3), 0.0))
+            .collect();
+        let thickness = 0.01;
+        let mut every = SelfContactBroadPhase::new();
+        every.list_every_overlap();
+        every.update(triangles, &x0, &x1, thickness);
+        let mut culled = SelfContactBroadPhase::new();
+        culled.update(triangles, &x0, &x1, thickness);
+        let kept_vt: std::collections::HashSet<_> = culled.vertex_triangle_pairs().iter().copied().collect();
+        let kept_ee: std::collections::HashSet<_> = culled.edge_edge_pairs().iter().copied().collect();
+        for p in every.vertex_triangle_pairs() {
+            let [a, b, c] = triangles[p.triangle as usize].map(|i| i as usize);
+            let v = p.vertex as usize;
+            if vertex_triangle_impact([x0[v], x0[a], x0[b], x0[c]], [x1[v], x1[a], x1[b], x1[c]], thickness)
+                .is_some()
+            {
+                hits += 1;
+                assert!(kept_vt.contains(p), "case {case}: {p:?} skipped");
+            }
+        }
+        for p in every.edge_edge_pairs() {
+            let [[a0, a1], [b0, b1]] = p.edges.map(|e| e.map(|i| i as usize));
+            if edge_edge_impact([x0[a0], x0[a1], x0[b0], x0[b1]], [x1[a0], x1[a1], x1[b0], x1[b1]], thickness)
+                .is_some()
+            {
+                hits += 1;
+                assert!(kept_ee.contains(p), "case {case}: {p:?} skipped");
+            }
+        }
+        culled_pairs += kept_vt.len() + kept_ee.len();
+        all_pairs += every.vertex_triangle_pairs().len() + every.edge_edge_pairs().len();
+    }
+    assert!(hits > 100, "the folds must make impacts: {hits}");
+    assert!(culled_pairs <= all_pairs);
+    // A flat sheet falling with a gentle ripple: no candidate at all, where every box overlap gives
+    // hundreds (the neighbours of every element).
+    let x1: Vec<DVec3> =
+        flat.iter().map(|p| *p + DVec3::new(0.0, 0.0, -0.05 + 0.01 * (3.0 * p.x).sin())).collect();
+    let mut culled = SelfContactBroadPhase::new();
+    culled.update(triangles, &flat, &x1, 0.01);
+    assert_eq!((culled.vertex_triangle_pairs().len(), culled.edge_edge_pairs().len()), (0, 0));
+    let mut every = SelfContactBroadPhase::new();
+    every.list_every_overlap();
+    every.update(triangles, &flat, &x1, 0.01);
+    assert!(every.vertex_triangle_pairs().len() + every.edge_edge_pairs().len() > 200);
 }

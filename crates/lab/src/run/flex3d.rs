@@ -96,6 +96,7 @@ pub fn run(
         scene.dt_s,
         scene.n_steps(),
         world.max_frequency(),
+        0.0,
         damping.as_deref(),
     ) {
         progress.warn(&w);
@@ -181,6 +182,10 @@ pub fn run(
             progress.warn(&w);
             warnings.push(w);
         }
+    }
+    if let Some(w) = watch.warning() {
+        progress.warn(&w);
+        warnings.push(w);
     }
     let summary = Summary {
         scene: label.to_owned(),

@@ -183,13 +183,28 @@ pub struct Summary {
 pub(crate) struct CrossingWatch {
     pub largest: usize,
     spent: std::time::Duration,
+    /// Whether a count was abandoned for its work budget (a tangled or exploded mesh), and the first
+    /// such look's reason.
+    pub abandoned: Option<String>,
 }
 
 impl CrossingWatch {
+    /// Counts the crossings of the state, within the count's work budget
+    /// ([`anima_geom::count_self_intersections_within`]): a mesh that blew up is not walked for minutes.
     pub fn look(&mut self, x: &[DVec3], triangles: &[[u32; 3]]) {
         let started = std::time::Instant::now();
-        self.largest = self.largest.max(anima_geom::count_self_intersections(x, triangles));
+        match anima_geom::count_self_intersections_within(x, triangles, None) {
+            Ok(n) => self.largest = self.largest.max(n),
+            Err(e) => {
+                self.abandoned.get_or_insert_with(|| e.to_string());
+            }
+        }
         self.spent += started.elapsed();
+    }
+
+    /// The warning for the summary when a count was abandoned.
+    pub fn warning(&self) -> Option<String> {
+        self.abandoned.as_ref().map(|why| format!("self-intersections not counted at every frame: {why}"))
     }
 
     /// Seconds spent counting.
@@ -497,8 +512,9 @@ impl Overrides {
 }
 
 /// What a step beyond the integrator's stability limit means for the scene at hand, or `None` when it
-/// means nothing worth a warning. `omega_max` is the scene's highest undamped frequency (rad/s) and
-/// `n_steps` the run's length; `damping` describes the scene's damping ("literal friction μ = 0.6"),
+/// means nothing worth a warning. `omega_max` is the scene's highest undamped frequency (rad/s), `zeta`
+/// that mode's damping ratio (the limit is the damped oscillator's,
+/// [`anima_ode::stability::damped_stability_limit`]) and `n_steps` the run's length; `damping` describes the scene's damping ("literal friction μ = 0.6"),
 /// `None` when it has none.
 ///
 /// Forward Euler has no stable step at all for an undamped oscillation: each step multiplies its
@@ -511,9 +527,10 @@ pub fn stability_warning(
     dt: f64,
     n_steps: usize,
     omega_max: f64,
+    zeta: f64,
     damping: Option<&str>,
 ) -> Option<String> {
-    let limit = anima_ode::stability::stability_limit(integrator);
+    let limit = anima_ode::stability::damped_stability_limit(integrator, zeta);
     if limit.is_infinite() || omega_max <= 0.0 || dt * omega_max <= limit {
         return None;
     }
@@ -531,9 +548,14 @@ pub fn stability_warning(
             if ln_growth > 700.0 { "∞".to_owned() } else { format!("{:.2e}", ln_growth.exp()) }
         )
     } else {
+        let oscillation = if zeta > 0.0 {
+            format!("an oscillation damped as the scene damps its fastest mode (ζ = {zeta:.2})")
+        } else {
+            "an undamped oscillation".to_owned()
+        };
         format!(
             "{integrator} at Δt = {dt:.3e} s: h·ω_max = {h_omega:.3} with ω_max = {omega_max:.3e} rad/s, beyond the \
-             stability limit h·ω ≤ {limit} (Δt ≤ {:.3e} s) of an undamped oscillation",
+             stability limit h·ω ≤ {limit} (Δt ≤ {:.3e} s) of {oscillation}",
             limit / omega_max
         )
     };
@@ -564,24 +586,36 @@ mod tests {
     #[test]
     fn stability_warnings_say_what_the_step_means_for_the_scene() {
         // The default tablecloth: forward Euler, h·ω = 0.014 over 10⁴ steps grows an undamped mode 2.7×.
-        assert_eq!(stability_warning(Integrator::ForwardEuler, 1e-3, 10_000, 13.93, Some("friction")), None);
+        assert_eq!(
+            stability_warning(Integrator::ForwardEuler, 1e-3, 10_000, 13.93, 0.0, Some("friction")),
+            None
+        );
         // Ten times the step: ×10⁴¹ over the run.
         let w = stability_warning(
             Integrator::ForwardEuler,
             1e-2,
             10_000,
             13.93,
+            0.0,
             Some("literal friction μ = 0.6"),
         )
         .expect("a warning");
         assert!(w.contains("grows ×") && w.contains("μ = 0.6") && w.contains("ζ ≥ h·ω/2 = 0.070"), "{w}");
-        let w = stability_warning(Integrator::ForwardEuler, 1e-2, 10_000, 13.93, None).expect("a warning");
+        let w =
+            stability_warning(Integrator::ForwardEuler, 1e-2, 10_000, 13.93, 0.0, None).expect("a warning");
         assert!(w.contains("no damping") && w.contains("will go non-finite"), "{w}");
         // RK4 is stable up to h·ω ≈ 2.83: no warning below, one above whatever the run's length.
-        assert_eq!(stability_warning(Integrator::Rk4, 0.1, 1_000_000, 28.0, None), None);
-        let w = stability_warning(Integrator::Rk4, 0.1, 10, 29.0, Some("spring damping")).expect("a warning");
+        assert_eq!(stability_warning(Integrator::Rk4, 0.1, 1_000_000, 28.0, 0.0, None), None);
+        let w = stability_warning(Integrator::Rk4, 0.1, 10, 29.0, 0.0, Some("spring damping"))
+            .expect("a warning");
         assert!(w.contains("beyond the stability limit h·ω ≤ 2.8"), "{w}");
-        assert_eq!(stability_warning(Integrator::ImplicitEuler, 1.0, 10, 1e6, None), None);
+        assert_eq!(stability_warning(Integrator::ImplicitEuler, 1.0, 10, 1e6, 0.0, None), None);
+        // Damping at the highest mode narrows symplectic Euler's limit: h·ω = 1.5 is stable undamped
+        // and not at ζ = 0.7 (limit 1.04).
+        assert_eq!(stability_warning(Integrator::SymplecticEuler, 1.5e-4, 10, 1e4, 0.0, Some("c")), None);
+        let w = stability_warning(Integrator::SymplecticEuler, 1.5e-4, 10, 1e4, 0.7, Some("c"))
+            .expect("a warning");
+        assert!(w.contains("h·ω ≤ 1.04") && w.contains("ζ = 0.70"), "{w}");
     }
 
     #[test]

@@ -137,6 +137,10 @@ pub fn run(
     let c = cloth.cloth();
     watch.look(c.positions(), c.triangles());
     let stats = cloth.stats();
+    if let Some(w) = watch.warning() {
+        progress.warn(&w);
+        warnings.push(w);
+    }
     let summary = Summary {
         scene: label.to_owned(),
         kind: "oliveira",

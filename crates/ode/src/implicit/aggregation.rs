@@ -75,10 +75,6 @@ pub(crate) struct RigidAggregation<C: Coord> {
     /// The coordinates of aggregate g, increasing: `members[member_start[g]..member_start[g + 1]]`.
     members: Vec<u32>,
     member_start: Vec<u32>,
-    /// Per aggregate g, (h, coarse pair) for its pairs with h > g, sorted by h:
-    /// `adjacent[adjacent_start[g]..adjacent_start[g + 1]]`.
-    adjacent: Vec<(u32, u32)>,
-    adjacent_start: Vec<u32>,
     /// Rᵀ r per aggregate (the restriction, before it is laid out for the coarse solve).
     restricted: Vec<[f64; MAX_PER]>,
     n_agg: usize,
@@ -228,8 +224,6 @@ impl<C: Coord> RigidAggregation<C> {
             members: Vec::new(),
             member_start: Vec::new(),
             restricted: Vec::new(),
-            adjacent: Vec::new(),
-            adjacent_start: Vec::new(),
             n_agg: 0,
             per: 0,
             lever: Vec::new(),
@@ -371,27 +365,6 @@ impl<C: Coord> RigidAggregation<C> {
             self.flip.push(gi > gj);
         }
         self.n_pairs = pairs.len();
-        // Per aggregate, its coarse pairs with higher aggregates sorted by the other aggregate, for the
-        // rank-one stencils' couplings.
-        self.adjacent_start.clear();
-        self.adjacent_start.resize(self.n_agg + 1, 0);
-        for &(gi, _) in &pairs {
-            self.adjacent_start[gi as usize + 1] += 1;
-        }
-        for g in 0..self.n_agg {
-            self.adjacent_start[g + 1] += self.adjacent_start[g];
-        }
-        self.adjacent.clear();
-        self.adjacent.resize(pairs.len(), (0, 0));
-        let mut fill: Vec<u32> = self.adjacent_start[..self.n_agg].to_vec();
-        for (e, &(gi, gj)) in pairs.iter().enumerate() {
-            self.adjacent[fill[gi as usize] as usize] = (gj, e as u32);
-            fill[gi as usize] += 1;
-        }
-        for g in 0..self.n_agg {
-            self.adjacent[self.adjacent_start[g] as usize..self.adjacent_start[g + 1] as usize]
-                .sort_unstable();
-        }
         // The scalar pattern: inside each aggregate (upper triangle), then every coarse pair.
         let mut scalar = Vec::with_capacity(self.n_agg * per * (per - 1) / 2 + pairs.len() * per * per);
         for g in 0..self.n_agg {
@@ -739,7 +712,6 @@ impl<C: Coord> RigidAggregation<C> {
                 }
             }
         }
-        self.galerkin_stencils(a);
         if per == MAX_PER {
             for (i, c) in self.across.iter().enumerate() {
                 let g = self.agg[i];
@@ -752,81 +724,6 @@ impl<C: Coord> RigidAggregation<C> {
                     b = mat3_mul(&mat3_mul(p, &b), p);
                 }
                 add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &b);
-            }
-        }
-    }
-
-    /// The coarse pair of aggregates g < h.
-    fn coarse_pair(&self, g: u32, h: u32) -> Option<u32> {
-        let list = &self.adjacent
-            [self.adjacent_start[g as usize] as usize..self.adjacent_start[g as usize + 1] as usize];
-        list.binary_search_by_key(&h, |&(other, _)| other).ok().map(|k| list[k].1)
-    }
-
-    /// Rᵀ (w wᵀ) R of every rank-one stencil: per aggregate it touches, W_g = Σ Rᵢᵀ Sᵢ u_i over its
-    /// coordinates there, then W_g W_hᵀ on the blocks of each pair of those aggregates.
-    fn galerkin_stencils(&mut self, a: &SystemMatrix<C>) {
-        let per = self.per;
-        for (v, u) in a.stencil_vertices.iter().zip(&a.stencils) {
-            let mut groups: [(u32, [f64; MAX_PER]); 4] = [(NONE, [0.0; MAX_PER]); 4];
-            let mut count = 0;
-            for k in 0..4 {
-                let i = v[k] as usize;
-                let g = self.agg[i];
-                if g == NONE {
-                    continue;
-                }
-                let mut ui: [f64; 3] =
-                    std::array::from_fn(|c| if c < C::DIM { u[k].component(c) } else { 0.0 });
-                if self.projected[i] {
-                    let p = &self.projector[i];
-                    ui = std::array::from_fn(|r| p[r][0] * ui[0] + p[r][1] * ui[1] + p[r][2] * ui[2]);
-                }
-                let w = if per == 1 {
-                    let mut w = [0.0; MAX_PER];
-                    w[0] = ui[0];
-                    w
-                } else {
-                    modes_of(self.lever[i], ui)
-                };
-                let slot = match groups[..count].iter().position(|(h, _)| *h == g) {
-                    Some(s) => s,
-                    None => {
-                        groups[count].0 = g;
-                        count += 1;
-                        count - 1
-                    }
-                };
-                for c in 0..per {
-                    groups[slot].1[c] += w[c];
-                }
-            }
-            for p in 0..count {
-                let (g, wg) = groups[p];
-                let d = &mut self.d_blocks[g as usize];
-                for r in 0..per {
-                    for c in 0..per {
-                        d[r][c] += wg[r] * wg[c];
-                    }
-                }
-                for q in p + 1..count {
-                    let (h, wh) = groups[q];
-                    let (lo, hi, wl, wr) = if g < h { (g, h, wg, wh) } else { (h, g, wh, wg) };
-                    // Every pair of a stencil is a pattern pair, so its aggregates are a coarse pair.
-                    let Some(e) = self.coarse_pair(lo, hi) else {
-                        debug_assert!(
-                            false,
-                            "a rank-one stencil couples aggregates {lo} and {hi}, which no pattern pair does"
-                        );
-                        continue;
-                    };
-                    let o = &mut self.o_blocks[e as usize];
-                    for r in 0..per {
-                        for c in 0..per {
-                            o[r][c] += wl[r] * wr[c];
-                        }
-                    }
-                }
             }
         }
     }
@@ -997,7 +894,7 @@ mod tests {
         let masses: Vec<f64> = (0..n * n).map(|k| 1.0 + 0.5 * wobble(k, 2.1)).collect();
         let prescribed: Vec<bool> = (0..n * n).map(|k| k == 0).collect();
         let mut a = SystemMatrix::<DVec3>::new();
-        a.resize(n * n, &pattern, &[]);
+        a.resize(n * n, &pattern);
         a.spring_form = true;
         a.springs.clear();
         for (e, &(i, j)) in pattern.iter().enumerate() {
@@ -1044,51 +941,40 @@ mod tests {
     }
 
     /// The coarse matrix equals (S R)ᵀ A (S R) computed column by column from products with A: with
-    /// springs, rank-one stencils, extra diagonal terms and contact projectors (a sliding and a sticking
-    /// coordinate).
+    /// springs, isotropic pairs of negative weight (the bending elements' form), extra diagonal terms
+    /// and contact projectors (a sliding and a sticking coordinate).
     #[test]
     fn the_coarse_matrix_is_the_galerkin_product_of_the_filtered_system() {
-        for (with_stencils, with_projectors, extra) in [
+        for (with_pairs, with_projectors, extra) in [
             (false, false, 0.0),
             (false, false, 0.25),
             (false, true, 0.0),
             (true, false, 0.0),
             (true, true, 0.25),
         ] {
-            galerkin_case(with_stencils, with_projectors, extra);
+            galerkin_case(with_pairs, with_projectors, extra);
         }
     }
 
-    fn galerkin_case(with_stencils: bool, with_projectors: bool, extra: f64) {
+    fn galerkin_case(with_pairs: bool, with_projectors: bool, extra: f64) {
         let (mut a, mut pattern, masses, prescribed, x) = spring_system();
         let n = masses.len();
-        // Rank-one stencils over cells (every pair made a pattern pair), with zero springs on new pairs.
-        let stencils: Vec<[u32; 4]> =
-            if with_stencils { vec![[1, 7, 2, 8], [14, 21, 15, 20], [27, 33, 28, 34]] } else { vec![] };
-        for st in &stencils {
-            for a_ in 0..4 {
-                for b in a_ + 1..4 {
-                    let key = (st[a_].min(st[b]), st[a_].max(st[b]));
-                    if !pattern.contains(&key) {
-                        pattern.push(key);
-                        a.springs.push(super::super::SpringBlock {
-                            i: key.0,
-                            j: key.1,
-                            u: DVec3::ZERO,
-                            a: 0.0,
-                        });
-                    }
-                }
+        if with_pairs {
+            // Pairs across cells, a multiple of the identity of either sign.
+            for (k, (i, j)) in
+                [(1u32, 8u32), (7, 2), (14, 21), (20, 15), (27, 34), (33, 28)].into_iter().enumerate()
+            {
+                pattern.push((i.min(j), i.max(j)));
+                let weight = if k % 2 == 0 { -0.3 } else { 0.45 };
+                a.springs.push(super::super::SpringBlock {
+                    i: i.min(j),
+                    j: i.max(j),
+                    u: DVec3::ZERO,
+                    a: weight,
+                });
             }
         }
-        a.resize(n, &pattern, &stencils);
-        a.stencils = stencils
-            .iter()
-            .enumerate()
-            .map(|(e, _)| {
-                std::array::from_fn(|k| DVec3::new((e + k) as f64 * 0.3 - 0.5, 0.7, (k as f64).sin()))
-            })
-            .collect();
+        a.resize(n, &pattern);
         a.spring_form = true;
         a.masses = masses.iter().map(|m| m + extra).collect();
         // Projectors: coordinate 9 slides on a plane, 22 sticks.
@@ -1106,13 +992,12 @@ mod tests {
         let column = |g: usize, p: usize| -> Vec<DVec3> {
             (0..n)
                 .map(|i| {
-                    if agg.agg[i] as usize != g || agg.agg[i] == NONE {
+                    if agg.agg[i] == NONE || agg.agg[i] as usize != g {
                         return DVec3::ZERO;
                     }
                     let l = agg.lever[i];
                     let v = if p < 3 {
-                        let e = DVec3::AXES[p];
-                        e.cross(DVec3::new(l[0], l[1], l[2]))
+                        DVec3::AXES[p].cross(DVec3::new(l[0], l[1], l[2]))
                     } else {
                         DVec3::AXES[p - 3]
                     };
@@ -1120,14 +1005,21 @@ mod tests {
                 })
                 .collect()
         };
+        // The coarse pair of two aggregates, stored as (lower, higher).
+        let coarse_pair = |g: u32, h: u32| {
+            pattern.iter().enumerate().find_map(|(e, &(i, j))| {
+                let (gi, gj) = (agg.agg[i as usize], agg.agg[j as usize]);
+                ((gi.min(gj), gi.max(gj)) == (g.min(h), g.max(h)) && gi != gj)
+                    .then(|| agg.pair_of[e] as usize)
+            })
+        };
         let mut y = vec![DVec3::ZERO; n];
-        let unfiltered = Filter::None;
         let mut worst = 0.0f64;
         let scale = agg.d_blocks.iter().flat_map(|d| (0..6).map(move |p| d[p][p].abs())).fold(0.0, f64::max);
         for g in 0..agg.n_agg {
             for p in 0..6 {
                 let c = column(g, p);
-                a.mul(&pattern, unfiltered, &c, &mut y);
+                a.mul(&pattern, Filter::None, &c, &mut y);
                 for h in 0..agg.n_agg {
                     for q in 0..6 {
                         let r = column(h, q);
@@ -1135,10 +1027,9 @@ mod tests {
                         let stored = if g == h {
                             agg.d_blocks[g][q][p]
                         } else {
-                            let (lo, hi) = (g.min(h) as u32, g.max(h) as u32);
-                            match agg.coarse_pair(lo, hi) {
-                                Some(e) if (h as u32) == lo => agg.o_blocks[e as usize][q][p],
-                                Some(e) => agg.o_blocks[e as usize][p][q],
+                            match coarse_pair(g as u32, h as u32) {
+                                Some(e) if h < g => agg.o_blocks[e][q][p],
+                                Some(e) => agg.o_blocks[e][p][q],
                                 None => 0.0,
                             }
                         };
@@ -1149,7 +1040,7 @@ mod tests {
         }
         assert!(
             worst <= 1e-10 * scale,
-            "stencils {with_stencils}, projectors {with_projectors}, extra {extra}: largest difference {worst} (scale {scale})"
+            "pairs {with_pairs}, projectors {with_projectors}, extra {extra}: largest difference {worst} (scale {scale})"
         );
     }
 }

@@ -226,7 +226,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         next: &mut State<C>,
     ) -> Result<StepStats, OdeError> {
         let n = now.len();
-        self.a.resize(n, lin.pattern(), lin.rank_one_stencils());
+        self.a.resize(n, lin.pattern());
         self.trial.resize(n, C::default());
         self.delta.resize(n, C::default());
         let state = self.alpha.as_ref().expect("generalised-α workspace");
@@ -494,7 +494,6 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     diag: &mut self.a.diag,
                     off,
                     springs: spring_form.then_some(&mut self.a.springs),
-                    stencils: spring_form.then_some(&mut self.a.stencils),
                 },
                 &mut self.jac,
             );

@@ -38,7 +38,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         let n = now.len();
         let n_pairs = lin.pattern().len();
         self.jac.resize(n, n_pairs);
-        self.a.resize(n, lin.pattern(), lin.rank_one_stencils());
+        self.a.resize(n, lin.pattern());
         #[cfg(feature = "sparse-cholesky")]
         if matches!(self.solver, super::LinearSolver::RigidAggregation { .. }) {
             self.coarse_stale = true;

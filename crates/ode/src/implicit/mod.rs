@@ -82,24 +82,15 @@ pub trait Linearized<C: Coord> {
         let _ = (beta_v, beta_x, out);
     }
 
-    /// Quadruples of coordinates coupled by rank-one terms of the system matrix (a bending element's
-    /// w wᵀ, w = Σ_a e_a ⊗ u_a), which a system in [`Linearized::spring_form`] writes as four vectors
-    /// each ([`SystemOut::stencils`]). Every pair of a quadruple must be a pattern pair. Constant while
-    /// the topology is; the default is none.
-    fn rank_one_stencils(&self) -> &[[u32; 4]] {
-        &[]
-    }
-
     /// Writes the force and the blocks of the system matrix A = M − β_v D − β_x K in one pass
     /// ([`SystemOut`]): `diag` gets −β_v D_ii − β_x K_ii (the mass is added by the caller) and `off`
     /// gets −β_v D_ij − β_x K_ij on the pattern; a system in [`Linearized::spring_form`] is passed
     /// `springs` and replaces its contents with one block per pattern pair, in the pattern's order
-    /// (off_e = −(u uᵀ + a I)), and `stencils` with four vectors per rank-one stencil, in their order
-    /// (A gains w wᵀ), `diag` holding the sum of both exactly; it is passed an empty `off` when the
+    /// (off_e = −(u uᵀ + a I), `diag` holding their sum exactly); it is passed an empty `off` when the
     /// solver needs no blocks. The implicit steps call this once per Newton iteration; the default
-    /// goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` and
-    /// `stencils` as they are, and a system whose Jacobians are sums over pairs can override it to
-    /// skip the four intermediate block arrays.
+    /// goes through [`Linearized::force_and_jacobians`] and `scratch` and leaves `springs` as it is, and
+    /// a system whose Jacobians are sums over pairs can override it to skip the four intermediate block
+    /// arrays.
     #[expect(clippy::too_many_arguments, reason = "the state, the two coefficients and the outputs")]
     fn force_and_system(
         &mut self,
@@ -134,9 +125,6 @@ pub struct SystemOut<'a, C: Coord> {
     pub off: &'a mut [C::Block],
     /// In spring form: one block per pattern pair, in the pattern's order.
     pub springs: Option<&'a mut Vec<SpringBlock<C>>>,
-    /// In spring form: the four vectors of each rank-one stencil ([`Linearized::rank_one_stencils`]),
-    /// in their order.
-    pub stencils: Option<&'a mut Vec<[C; 4]>>,
 }
 
 /// One pair of a matrix in spring form (see [`Linearized::spring_form`]): B = u uᵀ + a I between

@@ -29,11 +29,6 @@ pub(crate) struct SystemMatrix<C: Coord> {
     /// The pattern's pairs split over the threads ([`Self::mul`] on every core, the serial product's
     /// bits).
     pub scatter: Scatter,
-    /// In spring form, the rank-one stencils: their coordinates ([`super::Linearized::rank_one_stencils`],
-    /// copied when they change), their vectors u_a (A gains w wᵀ, w = Σ e_a ⊗ u_a), and their split.
-    pub stencil_vertices: Vec<[u32; 4]>,
-    pub stencils: Vec<[C; 4]>,
-    pub stencil_scatter: Scatter,
 }
 
 impl<C: Coord> SystemMatrix<C> {
@@ -46,29 +41,17 @@ impl<C: Coord> SystemMatrix<C> {
             masses: Vec::new(),
             spring_form: false,
             scatter: Scatter::new(),
-            stencil_vertices: Vec::new(),
-            stencils: Vec::new(),
-            stencil_scatter: Scatter::new(),
         }
     }
 
     /// Sets the sizes for `n` coordinates and the pattern's pairs, and splits the pairs over the
     /// threads; allocates only when the sizes grow or the pattern changed.
-    pub fn resize(&mut self, n: usize, pattern: &[(u32, u32)], stencils: &[[u32; 4]]) {
+    pub fn resize(&mut self, n: usize, pattern: &[(u32, u32)]) {
         let z = C::block_identity(0.0);
         self.diag.resize(n, z);
         self.jacobi.resize(n, z);
         self.off.resize(pattern.len(), z);
         self.scatter.prepare(n, pattern.len(), |e| [pattern[e].0, pattern[e].1]);
-        if self.stencil_vertices != stencils {
-            self.stencil_vertices.clear();
-            self.stencil_vertices.extend_from_slice(stencils);
-            self.stencil_scatter.invalidate();
-        }
-        if !self.stencil_scatter.ready_for(n, stencils.len()) {
-            self.stencil_scatter.prepare(n, stencils.len(), |e| stencils[e]);
-        }
-        self.stencils.resize(stencils.len(), [C::default(); 4]);
     }
 
     /// A = M − β D − β₂ K from Jacobians (backward Euler and BDF2 pass β₂ = β²), and its block-Jacobi
@@ -131,8 +114,6 @@ impl<C: Coord> SystemMatrix<C> {
     /// y = A x, then filtered: on every core for large systems ([`Scatter`]), with the serial
     /// product's bits.
     pub fn mul(&self, pattern: &[(u32, u32)], filter: Filter<'_, C>, x: &[C], y: &mut [C]) {
-        // In block form the stencils are in the pair blocks already.
-        let stencil_pass = self.spring_form && !self.stencil_vertices.is_empty();
         self.scatter.run(y, |range, pairs, y| {
             let s = range.start;
             if self.spring_form {
@@ -164,32 +145,6 @@ impl<C: Coord> SystemMatrix<C> {
                     }
                     if range.contains(&j) {
                         y[j - s] += C::block_mul_transpose(self.off[e], x[i]);
-                    }
-                }
-            }
-            if !stencil_pass {
-                for i in range {
-                    y[i - s] = filter.one(i, y[i - s]);
-                }
-            }
-        });
-        if !stencil_pass {
-            return;
-        }
-        // y += Σ w (w·x) over the rank-one stencils, then the filter.
-        let (vertices, stencils) = (&self.stencil_vertices, &self.stencils);
-        self.stencil_scatter.run(y, |range, elements, y| {
-            let s = range.start;
-            for &e in elements {
-                let (v, u) = (vertices[e as usize], &stencils[e as usize]);
-                let w = u[0].dot(x[v[0] as usize])
-                    + u[1].dot(x[v[1] as usize])
-                    + u[2].dot(x[v[2] as usize])
-                    + u[3].dot(x[v[3] as usize]);
-                for k in 0..4 {
-                    let i = v[k] as usize;
-                    if range.contains(&i) {
-                        y[i - s] += u[k] * w;
                     }
                 }
             }
