@@ -78,6 +78,13 @@ enum Command {
         /// Python with them (ANIMA_PEERS_PYTHON); installs nothing, and without them times anima alone.
         #[arg(long)]
         peers: bool,
+        /// Instead: cloth at the size users simulate (the standard sheet at N = 64–256, the Bunny and
+        /// sphere drapes at 65²–257² vertices, 1/60 s): cost per particle-step on one core and every core,
+        /// where a step's time goes, contact and crossings at every step, errors against converged runs,
+        /// the peers of bench/peers/ (when ANIMA_PEERS_PYTHON names their Python) and the explicit sheet's
+        /// stability estimate; writes docs/benchmarks-scale.md (about half an hour; --quick: up to 129²).
+        #[arg(long)]
+        scale: bool,
     },
     /// Every test: the Rust workspace's, the glTF validator's and the Python package's (pytest, with a
     /// local Ray cluster). Installs what it needs under target/ (npm's gltf-validator, a Python virtual
@@ -171,6 +178,9 @@ fn main() -> Result<()> {
             let target = std::env::var_os("CARGO_TARGET_DIR")
                 .map_or_else(|| repo.root().join("target"), std::path::PathBuf::from);
             anima_lab::peers::run(&repo, &target.join("release/anima"))
+        }
+        Command::Bench { scale: true, quick, .. } => {
+            anima_lab::scale::run(&repo, anima_lab::scale::ScaleOptions { quick })
         }
         Command::Bench { quick, only, .. } => bench::run(&repo, quick, only.as_deref()),
         Command::Test { rust, gltf, python } => {

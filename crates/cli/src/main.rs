@@ -262,9 +262,9 @@ struct RunArgs {
     /// reports the RMS distance to it.
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// Sheet scenes: run on one thread. By default a sheet uses every core, with the same results to
-    /// the bit, from 1 024 particles (32 × 32) with symplectic Euler and from 65 536 (256 × 256) with
-    /// the other explicit methods.
+    /// Run on one thread. By default the implicit steps of every cloth use every core, and so does a
+    /// sheet from 1 024 particles (32 × 32) with symplectic Euler and from 65 536 (256 × 256) with the
+    /// other explicit methods; the results are the same to the bit.
     #[arg(long)]
     one_thread: bool,
 }

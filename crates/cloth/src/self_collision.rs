@@ -248,9 +248,11 @@ pub struct SelfCollisionResponse {
     impacts: Vec<[u32; 4]>,
     /// Zones (by root) found colliding with themselves in a round.
     self_impacts: Vec<u32>,
-    /// [`SelfCollisionResponse::filter_step`]'s average velocities of the step, before and after.
+    /// [`SelfCollisionResponse::filter_step`]'s average velocities of the step, before and after, and
+    /// the step's end positions before it (the particles it does not change keep them to the bit).
     step_velocity: Vec<DVec3>,
     filtered_velocity: Vec<DVec3>,
+    end_before: Vec<DVec3>,
     /// Time spent in the broad phase during the current call.
     broad_time: Duration,
     /// Velocities at the start of the current stage or pass, and the particles whose velocity it
@@ -451,14 +453,21 @@ impl SelfCollisionResponse {
         step_velocity.extend(x0.iter().zip(x1.iter()).map(|(a, b)| (*b - *a) / h));
         filtered.clear();
         filtered.extend_from_slice(&step_velocity);
+        let mut end = std::mem::take(&mut self.end_before);
+        end.clear();
+        end.extend_from_slice(x1);
         let mut stats = self.apply(settings, h, x0, &mut filtered, inv_mass, triangles, x1);
         for (i, (after, before)) in filtered.iter().zip(&step_velocity).enumerate() {
             if after != before {
                 v1[i] += *after - *before;
                 touched[i] = true;
                 stats.changed_particles += 1;
+            } else {
+                // Untouched: the step's own end, not x₀ + h (x₁ − x₀)/h rounded.
+                x1[i] = end[i];
             }
         }
+        self.end_before = end;
         self.step_velocity = step_velocity;
         self.filtered_velocity = filtered;
         stats

@@ -421,16 +421,26 @@ fn table(out: &mut String, curves: &[Curve], levels: &[(f64, &str)], stable_labe
 
 /// `cargo xtask bench [--quick] [--only SCENE]`: measures and writes `docs/benchmarks.md` (or prints one
 /// scene's table).
-pub fn run(repo: &Repo, quick: bool, only: Option<&str>) -> Result<()> {
-    let mut doc = String::new();
-    let machine = std::fs::read_to_string("/proc/cpuinfo")
+/// The CPU's model name, for a report's header.
+pub(crate) fn machine() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
             s.lines()
                 .find(|l| l.starts_with("model name"))
                 .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
         })
-        .unwrap_or_else(|| "unknown CPU".to_owned());
+        .unwrap_or_else(|| "unknown CPU".to_owned())
+}
+
+pub fn run(repo: &Repo, quick: bool, only: Option<&str>) -> Result<()> {
+    // Single-threaded, as the report says (the implicit steps would otherwise use every core).
+    anima_ode::parallel::on_one_thread(|| run_single(repo, quick, only))
+}
+
+fn run_single(repo: &Repo, quick: bool, only: Option<&str>) -> Result<()> {
+    let mut doc = String::new();
+    let machine = machine();
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     let _ = write!(
         doc,

@@ -53,4 +53,5 @@ pub mod picture;
 pub mod repo;
 pub mod report;
 pub mod run;
+pub mod scale;
 pub mod sim;

@@ -18,8 +18,9 @@
 //!   mesh numbered with locality).
 //!
 //! The threads are rayon's: the global pool (every core by default, `RAYON_NUM_THREADS` to choose) or
-//! the pool a caller runs the step in (`ThreadPool::install`). Small problems stay on the calling
-//! thread, where starting threads would cost more than it saves; that choice changes no result either.
+//! the pool a caller runs the step in (`ThreadPool::install`); [`on_one_thread`] keeps everything on the
+//! calling thread. Small problems stay on the calling thread, where starting threads would cost more
+//! than it saves; that choice changes no result either.
 
 use std::ops::Range;
 
@@ -31,9 +32,23 @@ pub const SUM_BLOCK: usize = 4096;
 /// Below this many items a loop runs on the calling thread.
 pub const PARALLEL_MIN: usize = 8192;
 
+thread_local! {
+    /// Set while [`on_one_thread`] runs: every loop here stays on the calling thread.
+    static ONE_THREAD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// The threads a parallel loop started here would use.
 pub fn threads() -> usize {
-    rayon::current_num_threads()
+    if ONE_THREAD.with(|o| o.get()) { 1 } else { rayon::current_num_threads() }
+}
+
+/// Runs `f` with every parallel loop of this module on the calling thread (what `anima run
+/// --one-thread` asks for; the results are the same bits either way).
+pub fn on_one_thread<T>(f: impl FnOnce() -> T) -> T {
+    let before = ONE_THREAD.with(|o| o.replace(true));
+    let out = f();
+    ONE_THREAD.with(|o| o.set(before));
+    out
 }
 
 /// Items per chunk of an elementwise loop over `n` items (a few chunks a thread, for balance).

@@ -43,10 +43,10 @@ pub struct RunOptions {
     pub reference: Option<Vec<DVec3>>,
     /// An animation of the whole run to write at its end (`animation.glb` for glTF), beside the frames.
     pub export: Option<Export>,
-    /// Sheet scenes: run the explicit integrators on every core when the sheet has at least
-    /// [`PARALLEL_MIN_PARTICLES`] particles, or [`PARALLEL_MIN_PARTICLES_FUSED`] for symplectic Euler
-    /// (the `anima` binary's default; `--one-thread` turns it off). The results are the same to the bit
-    /// as on one thread.
+    /// Run on every core (the `anima` binary's default; `--one-thread` turns it off): the implicit
+    /// steps of every cloth kind (`anima_ode::parallel`), and a sheet's explicit integrators when it has
+    /// at least [`PARALLEL_MIN_PARTICLES`] particles, or [`PARALLEL_MIN_PARTICLES_FUSED`] for symplectic
+    /// Euler. The results are the same to the bit as on one thread.
     pub parallel: bool,
 }
 
@@ -306,13 +306,17 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
             progress.warn(&format!("removed {removed} frame files of an earlier run from {}", dir.display()));
         }
     }
-    match scene {
+    let run = |progress: &mut dyn Progress| match scene {
         Scene::Flex3d(s) => Ok(flex3d::run(s, label, opts, progress)?.0),
         Scene::Sheet(s) => sheet::run(s, label, opts, progress),
         Scene::Oliveira(s) => oliveira::run(s, label, opts, progress),
         Scene::Body(s) => body::run_body(s, label, opts, progress),
         Scene::Character(s) => body::run_character(s, label, opts, progress),
+    };
+    if opts.parallel {
+        return run(progress);
     }
+    anima_ode::parallel::on_one_thread(|| run(progress))
 }
 
 /// Frames shown on a contact sheet: nine spread evenly over the run, ending with the last one.
