@@ -638,7 +638,7 @@ fn peers_section(repo: &Repo, drapes: &[DrapeRun]) -> Result<String> {
                 out,
                 "| {obstacle} {v}² | {label} | {ms:.0} | {ours:.1} | {:.1}× | {} | {} | {:.1} % | {error} |",
                 ms / ours,
-                r["inside"],
+                r["inside"]["total"],
                 r["crossing_pairs"],
                 100.0 * r["mean_abs_strain"].as_f64().unwrap_or(f64::NAN),
             );

@@ -16,7 +16,8 @@
 //!
 //! Why the converged in-solve run needs more Newton iterations than the default: the stick/slide regimes
 //! of its friction are decided between Newton iterations, and with the default count they have not
-//! settled at the end of a step, whatever the step. Measured on the Bunny with the default count, the
+//! settled at the end of a step, whatever the step. Measured on the Bunny with the default count (while
+//! the bending was still explicit), the
 //! runs at 1/1000, 1/4000 and 1/8000 s lay 38.7, 36.6 and 44.2 mm from the one at 1/16 000 s: no
 //! convergence. With eight iterations 1/1000 and 1/4000 s lie 11.3 and 3.8 mm from 1/16 000 s, and
 //! without friction (μ = 0) they converge with the default count too (3.2 and 1.3 mm).
@@ -30,8 +31,10 @@
 //! 1 + 10⁻⁹ ([`PERTURBED_GRAVITY`]): how far a run moves under a change that small is the part of its
 //! error that no step size controls. Measured: the thesis's RK4 moves 0.01 mm on every drape, and
 //! generalised-α with contact after the step 0.00 mm. With contact in the solve the converged Bunny
-//! itself moves 7.4 mm (the table and the sphere 0.1 and 0.4 mm), and at 1/60 s the Bunny moves 17.8 mm,
-//! the sphere 8.2 mm and the table 4.3 mm: discrete contact decisions amplify it. Before the bounce
+//! itself moves 8.2 mm (the table and the sphere 0.04 and 0.9 mm), and at 1/60 s the Bunny moves 24.6 mm,
+//! the table 1.3 mm and the sphere 0.00 mm (at 1/240 s 1.5 mm): discrete contact decisions amplify it,
+//! and by how much changes from build to build (with explicit bending, the Bunny at 1/60 s moved 17.8 mm
+//! and the sphere 8.2 mm). Before the bounce
 //! moved to the time of impact the Bunny at 1/60 s moved 35 mm (11 mm with μ = 0, 11–13 mm with 2, 5 or
 //! 8 Newton iterations, so not friction alone), and hysteresis in those decisions moved the sensitivity
 //! rather than removing it (tried, not kept): releasing a contact only once it pulls with 5 % of its
@@ -42,14 +45,15 @@
 //! reference again with no bounce (e = 0), no friction (μ = 0) or neither. What is left with neither is
 //! the integrator's error on the cloth's own motion (and where contacts are found); what the bounce and
 //! the friction add is the cost of deciding them once per step; two more columns run with ρ∞ = 1 to show
-//! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 16.4 mm is 9.1 mm without the
-//! bounce, 12.7 mm with neither bounce nor friction and 6.5 mm with neither and no damping, but 17.6 mm
+//! what generalised-α's damping adds. Measured at 1/60 s: the sphere's 23.7 mm is 17.4 mm without the
+//! bounce, 11.6 mm with neither bounce nor friction and 5.8 mm with neither and no damping, but 24.4 mm
 //! with its own law and no damping: no one change brings it near 5 mm (at 1/120 s its cells are
-//! 1.6–8.4 mm). The Bunny stays at 21–63 mm in every cell (and moves 17.8 mm at 1/60 s under the
-//! sensitivity study's perturbation). The table's outliers are friction near its limit: at 1/120 s
-//! with e = 0 (21.3 mm) one quadrant of the cloth ends 45 mm off just below the table's rim and 85 mm
-//! off at its corner, the rest within 5 mm; undamped at 1/60 s (31.1 mm) two opposite quadrants slip
-//! 30–35 mm on the table's top. Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
+//! 1.7–14.8 mm). The Bunny's friction decides most of its error: 20–72 mm with friction at every step,
+//! 8–13 mm without it at 1/120 and 1/240 s (and it moves 24.6 mm at 1/60 s under the sensitivity
+//! study's perturbation). The table's outliers are friction near its limit: undamped at 1/60 s it errs
+//! 28.7 mm; with explicit bending, at 1/120 s with e = 0 (21.3 mm) one quadrant of the cloth ended 45 mm
+//! off just below the table's rim and 85 mm off at its corner, the rest within 5 mm, and undamped at
+//! 1/60 s (31.1 mm) two opposite quadrants slipped 30–35 mm on the table's top. Which way such a quadrant goes flips with details far from the step's accuracy: with the bounce at
 //! the end of the step (before it moved to the time of impact) the table at 1/240 s had two quadrants
 //! off (31.5 mm); allowing 16 regime changes per contact and step instead of 4 brought that run to
 //! 0.7 mm from the thesis's, and 20 Newton iterations on top of that took it to 31.0 mm again (tried,
