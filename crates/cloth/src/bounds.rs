@@ -155,7 +155,9 @@ pub struct OutOfBounds {
 /// What the energy bound measures from: the start's positions, energy and scale.
 #[derive(Debug, Clone)]
 struct EnergyBase {
-    x0: Vec<DVec3>,
+    /// The particles and Σ m x at the start: gravity's work since is g · (Σ m x − Σ m x₀).
+    particles: usize,
+    moment0: DVec3,
     /// E_k(0) + E_el(0), J.
     energy: f64,
     /// 10⁻³ of the weight times the extent, J.
@@ -211,7 +213,8 @@ impl BoundsWatch {
         let kinetic: f64 = v.iter().zip(masses).map(|(v, m)| 0.5 * m * v.length_squared()).sum();
         let weight = masses.iter().sum::<f64>() * gravity.length();
         self.energy = self.bounds.energy_factor.map(|_| EnergyBase {
-            x0: x.to_vec(),
+            particles: x.len(),
+            moment0: x.iter().zip(masses).map(|(x, m)| *x * *m).sum(),
             energy: kinetic + elastic,
             floor: 1e-3 * weight * extent(x),
         });
@@ -249,11 +252,11 @@ impl BoundsWatch {
             }
         }
         if let (Some(factor), Some(base)) = (b.energy_factor, &self.energy)
-            && base.x0.len() == x.len()
+            && base.particles == x.len()
         {
             let kinetic: f64 = v.iter().zip(masses).map(|(v, m)| 0.5 * m * v.length_squared()).sum();
-            let work: f64 =
-                x.iter().zip(&base.x0).zip(masses).map(|((x, x0), m)| m * gravity.dot(*x - *x0)).sum();
+            let moment: DVec3 = x.iter().zip(masses).map(|(x, m)| *x * *m).sum();
+            let work = gravity.dot(moment - base.moment0);
             let available = base.energy + work;
             if kinetic > factor * available.max(0.0) + base.floor {
                 return out(Bound::Energy { kinetic, available, factor });
