@@ -160,7 +160,7 @@ impl Default for SelfCollision {
 }
 
 /// What one application of the response did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SelfCollisionStats {
     /// Proximity pairs that received a repulsion impulse.
     pub repulsions: usize,
@@ -178,6 +178,10 @@ pub struct SelfCollisionStats {
     pub zone_iterations: usize,
     /// Whether the last resort (every particle frozen) acted.
     pub froze_everything: bool,
+    /// The farthest a particle of a frozen zone would have moved over the step when it joined its
+    /// zone, m (0 without frozen zones; the largest over the calls when summed): what the fail-safe
+    /// held back, and so how far the springs into the zone can be stretched by it.
+    pub frozen_motion: f64,
     /// Particles whose motion over the step the response changed
     /// ([`SelfCollisionResponse::filter_step`] only).
     pub changed_particles: usize,
@@ -223,6 +227,7 @@ impl std::ops::AddAssign for SelfCollisionStats {
         self.frozen_zones += o.frozen_zones;
         self.zone_iterations += o.zone_iterations;
         self.froze_everything |= o.froze_everything;
+        self.frozen_motion = self.frozen_motion.max(o.frozen_motion);
         self.changed_particles += o.changed_particles;
         self.times += o.times;
     }
@@ -240,6 +245,8 @@ pub struct SelfCollisionResponse {
     frozen: Vec<bool>,
     members: Vec<u32>,
     in_zone: Vec<bool>,
+    /// Per zone member, h |v| when it joined its zone (entries of other particles are stale).
+    join_motion: Vec<f64>,
     mass: Vec<f64>,
     moment: Vec<DVec3>,
     momentum: Vec<DVec3>,
@@ -542,6 +549,7 @@ impl SelfCollisionResponse {
         self.frozen.resize(n, false);
         self.in_zone.clear();
         self.in_zone.resize(n, false);
+        self.join_motion.resize(n, 0.0);
         self.members.clear();
         // Every round merges two zones or freezes one (module docs), so this cap is never the reason
         // the loop ends unless rounding defeats the argument; then everything is frozen.
@@ -572,6 +580,7 @@ impl SelfCollisionResponse {
                 for &i in &ids {
                     if !self.in_zone[i as usize] {
                         self.in_zone[i as usize] = true;
+                        self.join_motion[i as usize] = h * v[i as usize].length();
                         self.members.push(i);
                         self.frozen[i as usize] = inv_mass[i as usize] == 0.0;
                     }
@@ -593,6 +602,13 @@ impl SelfCollisionResponse {
             if self.find(i) == i {
                 zones += 1;
                 stats.frozen_zones += usize::from(self.frozen[i as usize]);
+            }
+        }
+        for k in 0..self.members.len() {
+            let i = self.members[k];
+            let root = self.find(i) as usize;
+            if self.frozen[root] {
+                stats.frozen_motion = stats.frozen_motion.max(self.join_motion[i as usize]);
             }
         }
         stats.zones = zones;

@@ -74,7 +74,7 @@ pub use implicit::contact;
 pub use implicit::workspace::SolveProfile;
 pub use implicit::{Jacobians, LinearSolver, Linearized, SpringBlock, SystemOut};
 pub use integrator::{Integrator, ParseIntegratorError};
-pub use stepper::{OdeError, State, StepStats, Stepper};
+pub use stepper::{OdeError, SavedHistory, State, StepStats, Stepper};
 
 /// A second-order system x'' = a(t, x, v) over `n_coords` coordinates.
 pub trait OdeSystem {

@@ -1,7 +1,7 @@
 //! The two linear solvers of implicit Euler — conjugate gradients and faer's sparse Cholesky — solve the
 //! same system; the direct one keeps prescribed coordinates exact and survives an indefinite matrix.
 
-use anima_ode::{Integrator, Jacobians, LinearSolver, Linearized, OdeSystem, State, Stepper};
+use anima_ode::{Integrator, Jacobians, LinearSolver, Linearized, OdeSystem, SavedHistory, State, Stepper};
 use glam::{DMat3, DVec3};
 
 /// A chain of particles joined by linear springs, the first one pinned, under gravity: exact spring
@@ -317,6 +317,43 @@ fn a_cloned_generalized_alpha_stepper_steps_identically() {
         std::mem::swap(&mut b, &mut b_next);
     }
     assert_eq!(a, b);
+}
+
+/// A discarded step leaves no trace once the history saved before it is put back: the step taken
+/// again is the first one to the bit, in whole and in halves alike; without the restore, generalised-α
+/// carries the discarded step's acceleration into the retry.
+#[test]
+fn a_step_taken_again_after_restoring_the_history_is_the_same_step() {
+    let (n, h) = (30, 1.0 / 60.0);
+    let mut chain = Chain::new(n);
+    let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
+    let mut now = start(n);
+    let mut next = now.clone();
+    for s in 0..5 {
+        stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
+        std::mem::swap(&mut now, &mut next);
+    }
+    let mut saved = SavedHistory::default();
+    stepper.save_history(&mut saved);
+    let mut halves = stepper.clone();
+    let (mut first, mut half, mut mid) = (now.clone(), now.clone(), now.clone());
+    stepper.step(&mut chain, 5.0 * h, h, &now, &mut first).expect("step");
+    halves.step(&mut chain, 5.0 * h, 0.5 * h, &now, &mut mid).expect("step");
+    halves.step(&mut chain, 5.5 * h, 0.5 * h, &mid, &mut half).expect("step");
+    // Without the restore the retry differs.
+    let mut again = now.clone();
+    let mut unrestored = stepper.clone();
+    unrestored.step(&mut chain, 5.0 * h, h, &now, &mut again).expect("step");
+    assert_ne!(again, first, "the history made no difference");
+    // Restored, it is the same step; and the same two halves.
+    stepper.restore_history(&saved);
+    stepper.step(&mut chain, 5.0 * h, h, &now, &mut again).expect("step");
+    assert_eq!(again, first);
+    stepper.restore_history(&saved);
+    let mut again_mid = now.clone();
+    stepper.step(&mut chain, 5.0 * h, 0.5 * h, &now, &mut again_mid).expect("step");
+    stepper.step(&mut chain, 5.5 * h, 0.5 * h, &again_mid, &mut again).expect("step");
+    assert_eq!(again, half);
 }
 
 /// Under a gravity of 1e200 the pinned chain's springs overflow after one step (a length of 1e196

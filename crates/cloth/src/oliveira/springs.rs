@@ -88,6 +88,11 @@ impl Springs {
     pub fn max_stiffness(&self) -> f64 {
         self.stiffness.iter().copied().fold(0.0, f64::max)
     }
+
+    /// Shortest rest length, m (infinite without springs).
+    pub fn shortest_rest_length(&self) -> f64 {
+        self.rest_length.iter().copied().fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// Jacobians of one spring's force on particle i with respect to particle j's position and velocity,
