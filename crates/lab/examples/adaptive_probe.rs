@@ -1,6 +1,6 @@
 //! Probe of one drape with the thesis's remesher: `TEST` = 1 | 2 | 3, `RULE` = min | literal, `T` = end
 //! time (s), `UNIFORM` set for the static 17 × 17 mesh instead, `IMPLICIT` for backward Euler at 1/4000 s
-//! (contact from the end-of-step velocity), `COARSEN=0` to turn `coarsen_simplification` off,
+//! (contact from the end-of-step velocity), `MEMBRANE` for the continuum model's forces, `SUBDIVISION` for the 1-to-4 remesher, `COARSEN=0` to turn `coarsen_simplification` off,
 //! `REBUILDS` to print every rebuild. Prints the state every 10 ms of simulated
 //! time (the smallest world area of a triangle over its rest area first), a rebuild that leaves a
 //! triangle under 5 % of its rest area, the fastest particle's springs and bending elements whenever a
@@ -28,11 +28,18 @@ fn main() -> anyhow::Result<()> {
         loaded.scene.time_step = StepRule::Fixed { dt_s: 1.0 / 4000.0 };
         loaded.scene.options.contact_velocity = anima_cloth::oliveira::ContactVelocity::EndOfStep;
     }
+    if std::env::var("MEMBRANE").is_ok() {
+        let material = anima_lab::oliveira::adaptive::membrane_material(&loaded.scene.material);
+        loaded.scene.options.membrane = Some(material);
+    }
     let cloth = loaded.build()?;
     let short_edge = if literal { ShortEdgeRule::LiteralSquare } else { ShortEdgeRule::MinLength };
-    let method = Remesher::Oliveira { test: n as u8, short_edge, interval_s: 1e-3 }
-        .method()
-        .map_err(anyhow::Error::msg)?;
+    let remesher = if std::env::var("SUBDIVISION").is_ok() {
+        Remesher::Subdivision { interval_s: 1e-3 }
+    } else {
+        Remesher::Oliveira { test: n as u8, short_edge, interval_s: 1e-3 }
+    };
+    let method = remesher.method().map_err(anyhow::Error::msg)?;
     let method = match method {
         anima_cloth::oliveira::AdaptiveMethod::Oliveira(mut p) => {
             p.coarsen_simplification = std::env::var("COARSEN").map_or(true, |s| s != "0");

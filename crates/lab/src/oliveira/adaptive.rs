@@ -105,7 +105,7 @@ const MEMBRANE_KINDS: [(Kind, &str); 11] = [
 /// The continuum model's material on the drapes: the thesis's E·t (10⁷ Pa × 0.1 mm = 1000 N/m) and,
 /// for what the thesis's springs do not define, the standard sheet's membrane (ν = 0.3, k_b = 10⁻³ N·m,
 /// c_d = 10⁻³ s; `crates/cloth/src/membrane.rs`).
-fn membrane_material(m: &anima_cloth::oliveira::Material) -> MembraneMaterial {
+pub fn membrane_material(m: &anima_cloth::oliveira::Material) -> MembraneMaterial {
     MembraneMaterial { young_thickness: m.young_modulus_pa * m.thickness_m, ..MembraneMaterial::STANDARD }
 }
 
@@ -413,13 +413,15 @@ const NOTES: &str = "## Notes and deviations\n\n\
 * **Durations.** Every run simulates the thesis's full test (0.5 s, 1 s, 0.6 s); errors and pictures are taken at \
 the thesis's four snapshot times. `ANIMA_ADAPTIVE_SHORT=1` runs the earlier shortened versions (0.2, 0.2, 0.3 s). \
 A run whose wall time passes 240 s is stopped where it is and marked \"stopped\", and one whose state turns \
-non-finite or that diverges (a particle more than 10 m from where the cloth's centre started) is marked \"failed\" (its error then covers only the snapshots it reached, and it is left out of the \
+non-finite, that diverges (a particle more than 10 m from where the cloth's centre started) or that leaves the \
+cloth's physical bounds (`anima_cloth::bounds`: speed, strain, and a kinetic energy no more than twice what the \
+start and gravity supplied, counted again from each remesh) is marked \"failed\" (its error then covers only the snapshots it reached, and it is left out of the \
 work–precision comparison and the claims).\n\
 * **Short-edge rule.** The thesis's remesher runs twice: with `ShortEdgeRule::MinLength` (reject a refinement \
 patch with an edge shorter than L⁰_min) and with the spec's literal (L⁰_min)² rule (the printed number, metres \
 squared read as metres). The literal rule accepts patches with much shorter edges (see \"min rest edge\"), so its \
-Δt is smaller and its steps more; on Test I it reproduces the thesis's frame count (132 919 against 134 127), which \
-supports the spec's reading that the thesis ran it. `OliveiraRemeshing::test_1/2/3` keep the literal rule (the \
+Δt is smaller and its steps more (each test's first table sets its step count beside the thesis's frame count; \
+on Test I the thesis printed 134 127 frames for its adaptive run, against 174 312 for the fine one). `OliveiraRemeshing::test_1/2/3` keep the literal rule (the \
 thesis's); `MinLength` is the switch for runs that cannot afford its steps. With `MinLength` no generated edge is shorter \
 than L⁰_min (see the edge-length rules below).\n\
 * **Push-out of new particles.** A new particle inside an object, or behind one on the cloth's outer side (the \
@@ -451,7 +453,12 @@ remeshed mesh; E·t = 1000 N/m from the thesis's material, ν = 0.3, k_b = 10⁻
 standard sheet's membrane, since the thesis's springs define none of them) with backward Euler at the same \
 fixed step, against its own 49 × 49 run. `docs/reproduction/membrane.md` shows this model's uniform meshes \
 approaching one another on the standard sheet; here the 33 × 33 row's error bounds how far 49 × 49 is from \
-converged. The sizing field runs at two smallest edges (4.5 and 3 cm) every 1/240 s.\n\
+converged. The sizing field runs at two smallest edges (4.5 and 3 cm) every 1/240 s. The remeshed membrane runs \
+marked failed are not false alarms: after a remesh the membrane rebuilt on the new mesh holds triangles at a \
+quarter to a third of their rest area, and the cloth flails at 20–33 m/s before its damping settles it (measured \
+with `cargo run --release -p anima-lab --example adaptive_probe` and `MEMBRANE=1`); before the bounds existed \
+these runs were reported as finished. With 1-to-4 subdivision this happens at the first remeshes (0.016–0.017 s \
+in Tests I and II).\n\
 * **Remeshing interval.** The thesis remeshes after every step (Fig. 4.1); here the thesis's remesher and 1-to-4 \
 run a pass every 1 ms of simulated time (`interval_s`, 0 restores every step) because a pass costs more than a \
 step. The sizing field runs every 1/60 s with RK4.\n\
