@@ -294,11 +294,9 @@ fn newton_iterations_converge_to_the_nonlinear_step() {
     assert!(r[4] < 1e-6 * r[0], "residuals after 1..5 Newton iterations: {r:?}");
 }
 
-/// A cloned generalised-α stepper (whose preconditioner keeps a factorisation made before the clone)
-/// steps exactly as the original.
-#[test]
-fn a_cloned_generalized_alpha_stepper_steps_identically() {
-    let (n, h) = (30, 1.0 / 60.0);
+/// A 30-particle chain and its generalised-α stepper after five steps of `h`, and the state they reached.
+fn alpha_after_five_steps(h: f64) -> (Chain, Stepper<DVec3>, State<DVec3>) {
+    let n = 30;
     let mut chain = Chain::new(n);
     let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
     let mut now = start(n);
@@ -307,6 +305,15 @@ fn a_cloned_generalized_alpha_stepper_steps_identically() {
         stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
         std::mem::swap(&mut now, &mut next);
     }
+    (chain, stepper, now)
+}
+
+/// A cloned generalised-α stepper (whose preconditioner keeps a factorisation made before the clone)
+/// steps exactly as the original.
+#[test]
+fn a_cloned_generalized_alpha_stepper_steps_identically() {
+    let h = 1.0 / 60.0;
+    let (mut chain, mut stepper, now) = alpha_after_five_steps(h);
     let mut twin = stepper.clone();
     let (mut a, mut b) = (now.clone(), now.clone());
     let (mut a_next, mut b_next) = (now.clone(), now);
@@ -324,15 +331,8 @@ fn a_cloned_generalized_alpha_stepper_steps_identically() {
 /// carries the discarded step's acceleration into the retry.
 #[test]
 fn a_step_taken_again_after_restoring_the_history_is_the_same_step() {
-    let (n, h) = (30, 1.0 / 60.0);
-    let mut chain = Chain::new(n);
-    let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
-    let mut now = start(n);
-    let mut next = now.clone();
-    for s in 0..5 {
-        stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
-        std::mem::swap(&mut now, &mut next);
-    }
+    let h = 1.0 / 60.0;
+    let (mut chain, mut stepper, now) = alpha_after_five_steps(h);
     let mut saved = SavedHistory::default();
     stepper.save_history(&mut saved);
     let mut halves = stepper.clone();
