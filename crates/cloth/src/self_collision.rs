@@ -599,15 +599,12 @@ impl SelfCollisionResponse {
         let mut zones = 0;
         for k in 0..self.members.len() {
             let i = self.members[k];
-            if self.find(i) == i {
+            let root = self.find(i);
+            if root == i {
                 zones += 1;
                 stats.frozen_zones += usize::from(self.frozen[i as usize]);
             }
-        }
-        for k in 0..self.members.len() {
-            let i = self.members[k];
-            let root = self.find(i) as usize;
-            if self.frozen[root] {
+            if self.frozen[root as usize] {
                 stats.frozen_motion = stats.frozen_motion.max(self.join_motion[i as usize]);
             }
         }

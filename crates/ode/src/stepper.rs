@@ -141,7 +141,6 @@ pub struct Stepper<C: Coord> {
 pub struct SavedHistory<C> {
     alpha: Vec<C>,
     alpha_valid: bool,
-    prev_h: f64,
     /// The contacts' last regime, reaction and friction, per coordinate in contact.
     regimes: Vec<(u32, crate::contact::Regime, C, C)>,
 }
@@ -302,16 +301,14 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// Saves what the implicit methods carry from one step to the next (generalised-α's acceleration,
-    /// BDF2's last step, the contacts' last regimes) into `saved`, so that a step can be discarded and
+    /// the contacts' last regimes) into `saved`, so that a step can be discarded and
     /// taken again from the same start ([`Stepper::restore_history`]). Copies only; `saved` keeps its
     /// buffers between calls.
     pub fn save_history(&self, saved: &mut SavedHistory<C>) {
         saved.alpha.clear();
         saved.alpha_valid = false;
-        saved.prev_h = 0.0;
         saved.regimes.clear();
         if let Some(ws) = &self.implicit {
-            saved.prev_h = ws.prev_h;
             if let Some(a) = &ws.alpha {
                 saved.alpha.extend_from_slice(&a.a);
                 saved.alpha_valid = a.valid;
@@ -325,25 +322,20 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// Puts back what [`Stepper::save_history`] saved, after a step from the same start was discarded.
-    /// The multistep methods, whose history the discarded step moved on, start theirs again (as after
-    /// [`Stepper::reset_history`]). Restarting generalised-α from M⁻¹ f instead would put the whole force
-    /// of the springs the discarded step's contacts stretched into the next step explicitly (see
+    /// Everything else starts again as after [`Stepper::reset_history`]: the multistep methods and BDF2,
+    /// whose history the discarded step moved on (BDF2's state one step back is now the start itself).
+    /// Restarting generalised-α from M⁻¹ f instead would put the whole force of the springs the
+    /// discarded step's contacts stretched into the next step explicitly (see
     /// [`Stepper::reset_history_of`]).
     pub fn restore_history(&mut self, saved: &SavedHistory<C>) {
-        if let Some(h) = &mut self.history {
-            h.len = 0;
-        }
+        self.reset_history();
         let Some(ws) = &mut self.implicit else { return };
-        ws.prev_h = saved.prev_h;
-        if let Some(a) = &mut ws.alpha {
-            if saved.alpha.len() == a.a.len() {
-                a.a.copy_from_slice(&saved.alpha);
-                a.valid = saved.alpha_valid;
-            } else {
-                a.valid = false;
-            }
+        if let Some(a) = &mut ws.alpha
+            && saved.alpha.len() == a.a.len()
+        {
+            a.a.copy_from_slice(&saved.alpha);
+            a.valid = saved.alpha_valid;
         }
-        ws.contact.forget();
         let c = &mut ws.contact;
         for &(i, regime, reaction, friction) in &saved.regimes {
             let k = i as usize;

@@ -101,9 +101,9 @@ pub struct OliveiraCloth {
     steps: u64,
     first_collision: Option<f64>,
     total_hits: u64,
-    /// Steps taken again in halves because the self-collision response froze a zone, and the
-    /// integrator's history at the start of the step being taken.
+    /// Steps taken again in halves because the self-collision response froze a zone.
     split_steps: u64,
+    /// The integrator's history at the start of the step being taken, for a retake in halves.
     saved_history: SavedHistory<DVec3>,
     /// Edges cast at the end of every step and answered on both ends: the adaptive remesher
     /// sets them to the edges it may no longer refine. Empty for a static mesh.
@@ -748,13 +748,13 @@ impl OliveiraCloth {
         self.total_hits
     }
 
-    /// What the modern self-collision response did over the run; `None` unless the scene asks for it.
     /// How many times a step (or a half of one) was taken again in two halves because the
     /// self-collision response had to freeze an impact zone ([`MAX_SPLITS`]).
     pub fn split_steps(&self) -> u64 {
         self.split_steps
     }
 
+    /// What the modern self-collision response did over the run; `None` unless the scene asks for it.
     pub fn self_collision_stats(&self) -> Option<SelfCollisionStats> {
         self.self_collision.map(|_| self.self_total)
     }

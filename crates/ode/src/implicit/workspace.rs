@@ -67,7 +67,7 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     pub(super) coarse_stale: bool,
     /// BDF2 only: the state one step back, and the step that led from it (0 when there is none).
     pub(super) bdf2: Option<State<C>>,
-    pub(crate) prev_h: f64,
+    pub(super) prev_h: f64,
     /// Backward Euler and BDF2: x̂ − x₀ + β v₀ (the vector K multiplies on the right-hand side), then v̂.
     /// Generalised-α: the velocity at which the force is evaluated.
     pub(super) w: Vec<C>,
