@@ -294,11 +294,11 @@ fn newton_iterations_converge_to_the_nonlinear_step() {
     assert!(r[4] < 1e-6 * r[0], "residuals after 1..5 Newton iterations: {r:?}");
 }
 
-/// A 30-particle chain and its generalised-α stepper after five steps of `h`, and the state they reached.
-fn alpha_after_five_steps(h: f64) -> (Chain, Stepper<DVec3>, State<DVec3>) {
+/// A 30-particle chain and its stepper after five steps of `h`, and the state they reached.
+fn after_five_steps(integrator: Integrator, h: f64) -> (Chain, Stepper<DVec3>, State<DVec3>) {
     let n = 30;
     let mut chain = Chain::new(n);
-    let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
+    let mut stepper = Stepper::new(integrator, n);
     let mut now = start(n);
     let mut next = now.clone();
     for s in 0..5 {
@@ -313,7 +313,7 @@ fn alpha_after_five_steps(h: f64) -> (Chain, Stepper<DVec3>, State<DVec3>) {
 #[test]
 fn a_cloned_generalized_alpha_stepper_steps_identically() {
     let h = 1.0 / 60.0;
-    let (mut chain, mut stepper, now) = alpha_after_five_steps(h);
+    let (mut chain, mut stepper, now) = after_five_steps(Integrator::GeneralizedAlpha, h);
     let mut twin = stepper.clone();
     let (mut a, mut b) = (now.clone(), now.clone());
     let (mut a_next, mut b_next) = (now.clone(), now);
@@ -332,7 +332,7 @@ fn a_cloned_generalized_alpha_stepper_steps_identically() {
 #[test]
 fn a_step_taken_again_after_restoring_the_history_is_the_same_step() {
     let h = 1.0 / 60.0;
-    let (mut chain, mut stepper, now) = alpha_after_five_steps(h);
+    let (mut chain, mut stepper, now) = after_five_steps(Integrator::GeneralizedAlpha, h);
     let mut saved = SavedHistory::default();
     stepper.save_history(&mut saved);
     let mut halves = stepper.clone();
@@ -361,15 +361,8 @@ fn a_step_taken_again_after_restoring_the_history_is_the_same_step() {
 /// states.
 #[test]
 fn bdf2_starts_again_after_a_discarded_step() {
-    let (n, h) = (30, 1.0 / 60.0);
-    let mut chain = Chain::new(n);
-    let mut stepper = Stepper::new(Integrator::Bdf2, n);
-    let mut now = start(n);
-    let mut next = now.clone();
-    for s in 0..5 {
-        stepper.step(&mut chain, s as f64 * h, h, &now, &mut next).expect("step");
-        std::mem::swap(&mut now, &mut next);
-    }
+    let h = 1.0 / 60.0;
+    let (mut chain, mut stepper, now) = after_five_steps(Integrator::Bdf2, h);
     let mut saved = SavedHistory::default();
     stepper.save_history(&mut saved);
     let mut fresh = stepper.clone();
