@@ -230,7 +230,7 @@ pub fn run_sheet(spec: &SheetSpec, method: &Method, duration: f64) -> SheetOutco
         profile: sim.stepper_mut().profile(),
         x: sim.state.x.clone(),
         wall_s,
-        steps: sim.steps_taken(),
+        steps: sim.steps() as usize,
         solver_iterations: sim.stats.solver_iterations,
         error: result.err().map(|e| e.to_string()),
     }

@@ -44,6 +44,7 @@
 mod assembly;
 pub mod bounds;
 pub mod contact_mode;
+pub mod error;
 pub mod flex3d;
 pub mod membrane;
 pub mod network_sim;
@@ -51,3 +52,5 @@ pub mod oliveira;
 pub mod self_collision;
 mod sheet_stencil;
 pub mod spring_net;
+
+pub use error::StepError;

@@ -57,7 +57,7 @@ use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, Stepper};
 use glam::DMat3;
 
 use crate::bounds::{BoundsWatch, Defaults};
-use crate::network_sim::RunError;
+use crate::error::{NonFinite, StepError};
 
 /// The material of a [`Membrane`], in the units of its field names.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -501,7 +501,7 @@ pub struct MembraneSim {
     pub state: State<DVec3>,
     next: State<DVec3>,
     dt: f64,
-    step: usize,
+    step: u64,
     /// Linear-solver iterations of the implicit steps so far.
     pub solver_iterations: usize,
     /// The physical bounds the run is checked against ([`crate::bounds`]: speed and energy; a
@@ -537,7 +537,8 @@ impl MembraneSim {
         self.step as f64 * self.dt
     }
 
-    pub fn steps_taken(&self) -> usize {
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
         self.step
     }
 
@@ -545,9 +546,30 @@ impl MembraneSim {
         self.dt
     }
 
+    /// Every vertex's position.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.state.x
+    }
+
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.state.v
+    }
+
+    /// Replaces every vertex's position and velocity; a multistep or implicit integrator starts its
+    /// history again, the step count and time go on.
+    ///
+    /// # Panics
+    /// If `x` or `v` does not hold one value per vertex.
+    pub fn set_state(&mut self, x: &[DVec3], v: &[DVec3]) {
+        assert!(x.len() == self.state.x.len() && v.len() == x.len(), "one position and velocity per vertex");
+        self.state.x.copy_from_slice(x);
+        self.state.v.copy_from_slice(v);
+        self.stepper.reset_history();
+    }
+
     /// Takes `n` steps; stops at the first that fails, leaves a non-finite value or leaves the bounds
     /// (checked every step for implicit integrators, every few dozen for explicit ones).
-    pub fn run(&mut self, n: usize) -> Result<(), RunError> {
+    pub fn run(&mut self, n: usize) -> Result<(), StepError> {
         let every =
             if self.stepper.integrator().is_implicit() { 1 } else { crate::bounds::EXPLICIT_CHECK_EVERY };
         if self.step == 0 {
@@ -556,20 +578,22 @@ impl MembraneSim {
         }
         for k in 0..n {
             let t = self.time();
+            let step = self.step + 1;
             let stats = self
                 .stepper
                 .step(&mut self.membrane, t, self.dt, &self.state, &mut self.next)
-                .map_err(|source| RunError::Solver { step: self.step + 1, source })?;
+                .map_err(|source| StepError::Solver { step, time: step as f64 * self.dt, source })?;
             std::mem::swap(&mut self.state, &mut self.next);
             self.step += 1;
             self.solver_iterations += stats.solver_iterations;
             if let Some(particle) = self.state.first_non_finite() {
-                return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+                let (step, time) = (self.step, self.time());
+                return Err(NonFinite { step, time, particle, place: None }.into());
             }
             if (k + 1) % every == 0 || k + 1 == n {
                 let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
                 self.bounds.check(
-                    self.step as u64,
+                    self.step,
                     self.time(),
                     x,
                     v,

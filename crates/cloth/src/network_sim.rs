@@ -15,6 +15,7 @@ use anima_ode::{Integrator, OdeError, State, StepStats, Stepper};
 
 use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
 use crate::contact_mode::ContactMode;
+use crate::error::{NonFinite, StepError};
 use crate::self_collision::{OBJECT_ROUNDS, SelfCollision, SelfCollisionResponse, SelfCollisionStats};
 use crate::spring_net::SpringNetwork;
 
@@ -180,7 +181,7 @@ pub struct NetworkSim {
     /// and the step's end before that response (for its next round).
     held: Vec<bool>,
     before_filter: (Vec<DVec3>, Vec<DVec3>),
-    step: usize,
+    step: u64,
     dt: f64,
     pub stats: StepStats,
     /// The physical bounds the run is checked against ([`crate::bounds`]), and the fastest drive of
@@ -234,13 +235,38 @@ impl NetworkSim {
         self.step as f64 * self.dt
     }
 
-    pub fn steps_taken(&self) -> usize {
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
         self.step
     }
 
     /// The step, s.
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// Every particle's position, in the network's order.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.state.x
+    }
+
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.state.v
+    }
+
+    /// Replaces every particle's position and velocity; a multistep or implicit integrator starts its
+    /// history again (the state jumped), the step count and time go on.
+    ///
+    /// # Panics
+    /// If `x` or `v` does not hold one value per particle.
+    pub fn set_state(&mut self, x: &[DVec3], v: &[DVec3]) {
+        assert!(
+            x.len() == self.state.x.len() && v.len() == x.len(),
+            "one position and velocity per particle"
+        );
+        self.state.x.copy_from_slice(x);
+        self.state.v.copy_from_slice(v);
+        self.stepper.reset_history();
     }
 
     pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
@@ -332,25 +358,31 @@ impl NetworkSim {
         let masses = anima_ode::Linearized::masses(&self.network);
         let springs = self.network.springs().iter().map(|s| (s.i, s.j, s.rest_length));
         let (x, v) = (&self.state.x, &self.state.v);
-        self.bounds.check(self.step as u64, self.time(), x, v, masses, self.network.gravity, springs)
+        self.bounds.check(self.step, self.time(), x, v, masses, self.network.gravity, springs)
     }
 
     /// One step: integrate, then resolve contacts (or integrate with the contacts constrained inside the
     /// solve, with [`ContactMode::InSolve`]); a non-finite state or one that left the bounds is an error
     /// naming the step.
-    pub fn step(&mut self) -> Result<(), RunError> {
+    pub fn step(&mut self) -> Result<(), StepError> {
         self.start_bounds();
-        self.step_unchecked().map_err(|source| RunError::Solver { step: self.step + 1, source })?;
+        let step = self.step + 1;
+        let time = step as f64 * self.dt;
+        self.step_unchecked().map_err(|source| StepError::Solver { step, time, source })?;
         self.check_step()?;
         Ok(self.check_bounds()?)
     }
 
     /// A non-finite state is an error naming the step and the particle.
-    fn check_step(&self) -> Result<(), RunError> {
+    fn check_step(&self) -> Result<(), StepError> {
         match self.state.first_non_finite() {
-            Some(particle) => Err(RunError::NonFinite { step: self.step, time: self.time(), particle }),
+            Some(particle) => Err(self.non_finite(particle)),
             None => Ok(()),
         }
+    }
+
+    fn non_finite(&self, particle: usize) -> StepError {
+        StepError::NonFinite(NonFinite { step: self.step, time: self.time(), particle, place: None })
     }
 
     fn step_unchecked(&mut self) -> Result<(), OdeError> {
@@ -415,7 +447,7 @@ impl NetworkSim {
     ///
     /// A sheet with nothing but its springs, stepped with symplectic Euler, takes the network's fused
     /// path ([`SpringNetwork::run_symplectic_euler`]): the same bits, with fewer passes over memory.
-    pub fn run(&mut self, n: usize) -> Result<(), RunError> {
+    pub fn run(&mut self, n: usize) -> Result<(), StepError> {
         self.start_bounds();
         // Explicit steps are checked against the bounds every few dozen steps, implicit ones every step.
         let every =
@@ -430,18 +462,20 @@ impl NetworkSim {
                     break;
                 };
                 let done = outcome.err().unwrap_or(chunk);
-                self.step += done;
+                self.step += done as u64;
                 self.stats.evaluations += done;
                 if outcome.is_err() {
                     let particle = self.state.first_non_finite().unwrap_or(0);
-                    return Err(RunError::NonFinite { step: self.step, time: self.time(), particle });
+                    return Err(self.non_finite(particle));
                 }
                 self.check_bounds()?;
                 left -= chunk;
             }
         }
         for k in 0..left {
-            self.step_unchecked().map_err(|e| RunError::Solver { step: self.step + 1, source: e })?;
+            let step = self.step + 1;
+            let time = step as f64 * self.dt;
+            self.step_unchecked().map_err(|source| StepError::Solver { step, time, source })?;
             self.check_step()?;
             if (k + 1) % every == 0 || k + 1 == left {
                 self.check_bounds()?;
@@ -587,28 +621,5 @@ impl ContactModel<DVec3> for AnalyticContacts<'_> {
                 });
             }
         }
-    }
-}
-
-/// Why a network run stopped.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum RunError {
-    #[error("non-finite state at step {step} (t = {time} s), particle {particle}")]
-    NonFinite { step: usize, time: f64, particle: usize },
-    /// The state left its physical bounds ([`crate::bounds`]).
-    #[error(transparent)]
-    Diverged(#[from] OutOfBounds),
-    #[error("step {step}: {source}")]
-    Solver { step: usize, source: OdeError },
-}
-
-impl RunError {
-    /// Whether the run went non-finite: in its state, or in the linear system of an implicit step
-    /// (which refuses the step and leaves the state as it was).
-    pub fn is_non_finite(&self) -> bool {
-        matches!(
-            self,
-            RunError::NonFinite { .. } | RunError::Solver { source: OdeError::NonFiniteSystem, .. }
-        )
     }
 }

@@ -4,8 +4,9 @@
 
 use std::path::Path;
 
+use anima_cloth::StepError;
 use anima_cloth::bounds::Bound;
-use anima_cloth::network_sim::{NetworkSim, RunError};
+use anima_cloth::network_sim::NetworkSim;
 use anima_cloth::oliveira::{OliveiraCloth, OliveiraScene, ShapeDesc};
 use anima_cloth::spring_net::SheetSpec;
 use anima_geom::{DVec3, TriangleMesh, count_self_intersections, read_obj};
@@ -76,7 +77,7 @@ fn a_diverging_sheet_is_stopped_by_its_bounds_soon_after_it_leaves_them() {
     let dt = 2.5e-5;
     let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
     let err = sim.run(40_000).unwrap_err();
-    let RunError::Diverged(out) = err else { panic!("expected the bounds to stop it: {err}") };
+    let StepError::Diverged(out) = err else { panic!("expected the bounds to stop it: {err}") };
     assert!(matches!(out.bound, Bound::Speed { .. } | Bound::Strain { .. } | Bound::Energy { .. }));
     assert!(out.to_string().contains("bound:"), "{out}");
     assert!(sim.state.first_non_finite().is_none(), "stopped while finite");
@@ -85,7 +86,7 @@ fn a_diverging_sheet_is_stopped_by_its_bounds_soon_after_it_leaves_them() {
     let first = loop {
         match single.run(1) {
             Ok(()) => continue,
-            Err(RunError::Diverged(e)) => break e.step,
+            Err(StepError::Diverged(e)) => break e.step,
             Err(e) => panic!("{e}"),
         }
     };

@@ -70,7 +70,7 @@ fn main() -> anyhow::Result<()> {
                     cl.time(),
                     st.refinements,
                     st.simplifications,
-                    cl.next_dt(),
+                    cl.dt(),
                     anima_cloth::oliveira::adaptive::min_rest_edge(cl.mesh())
                 );
             }

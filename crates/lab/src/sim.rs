@@ -97,7 +97,7 @@ impl ClothSim {
     pub fn run(&mut self, n: usize) -> Result<()> {
         match &mut self.model {
             ClothModel::Sheet(s) => Ok(s.run(n)?),
-            ClothModel::Flex3d(w) => Ok(w.run_to_step(w.steps_taken() + n)?),
+            ClothModel::Flex3d(w) => Ok(w.run_to_step(w.steps() + n as u64)?),
             ClothModel::Oliveira(_) => (0..n).try_for_each(|_| self.step()),
         }
     }
@@ -124,8 +124,8 @@ impl ClothSim {
     /// Steps taken so far.
     pub fn steps(&self) -> u64 {
         match &self.model {
-            ClothModel::Sheet(s) => s.steps_taken() as u64,
-            ClothModel::Flex3d(w) => w.steps_taken() as u64,
+            ClothModel::Sheet(s) => s.steps(),
+            ClothModel::Flex3d(w) => w.steps(),
             ClothModel::Oliveira(c) => c.cloth().steps(),
         }
     }
@@ -135,7 +135,7 @@ impl ClothSim {
         match &self.model {
             ClothModel::Sheet(s) => s.dt(),
             ClothModel::Flex3d(w) => w.dt(),
-            ClothModel::Oliveira(c) => c.cloth().next_dt(),
+            ClothModel::Oliveira(c) => c.cloth().dt(),
         }
     }
 

@@ -8,6 +8,4 @@ mod solve_contact;
 mod world;
 
 pub use desc::*;
-pub use world::{
-    BuildError, CollisionCounts, Diagnostics, Flex3dWorld, NonFiniteError, StepError, SurfaceInfo,
-};
+pub use world::{BuildError, CollisionCounts, Diagnostics, Flex3dWorld, SurfaceInfo};

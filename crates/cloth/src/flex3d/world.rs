@@ -9,8 +9,9 @@ use super::desc::{
 };
 use super::forces::{SurfaceForces, acceleration_with_friction, add_bending_forces, add_spring_forces};
 use super::solve_contact::{StaticContacts, THICKNESS_OF_SPACING};
-use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
+use crate::bounds::{Bounds, BoundsWatch, Defaults};
 use crate::contact_mode::ContactMode;
+use crate::error::{GridPlace, NonFinite, StepError};
 use crate::self_collision::{SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats};
 use anima_geom::self_contact::point_triangle_proximity;
 
@@ -21,40 +22,6 @@ pub enum BuildError {
     Surface { surface: String, message: String },
     #[error("scene: {0}")]
     Scene(String),
-}
-
-/// A value went non-finite: the run stops and says where.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("non-finite state at step {step} (t = {time} s): surface `{surface}`, particle ({row}, {col})")]
-pub struct NonFiniteError {
-    pub step: usize,
-    pub time: f64,
-    pub surface: String,
-    pub row: usize,
-    pub col: usize,
-}
-
-/// Why a step failed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum StepError {
-    #[error(transparent)]
-    NonFinite(#[from] NonFiniteError),
-    /// The state left its physical bounds ([`crate::bounds`]).
-    #[error(transparent)]
-    Diverged(#[from] OutOfBounds),
-    #[error("step {step} (t = {time} s): {source}")]
-    Solver { step: usize, time: f64, source: anima_ode::OdeError },
-}
-
-impl StepError {
-    /// Whether the run went non-finite: in its state, or in the linear system of an implicit step
-    /// (which refuses the step and leaves the state as it was).
-    pub fn is_non_finite(&self) -> bool {
-        matches!(
-            self,
-            StepError::NonFinite(_) | StepError::Solver { source: anima_ode::OdeError::NonFiniteSystem, .. }
-        )
-    }
 }
 
 /// How many collision responses the run has applied, by partner kind.
@@ -414,7 +381,7 @@ pub struct Flex3dWorld {
     dt: f64,
     frame_rate: f64,
     steps_per_frame: usize,
-    step: usize,
+    step: u64,
     counts: CollisionCounts,
     /// `ATRITO`'s coefficient, the Coulomb coefficient of contacts in the solve.
     friction: f64,
@@ -640,7 +607,8 @@ impl Flex3dWorld {
         self.step as f64 * self.dt
     }
 
-    pub fn steps_taken(&self) -> usize {
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
         self.step
     }
 
@@ -736,7 +704,11 @@ impl Flex3dWorld {
         } else {
             self.stepper.step(&mut self.model, t, self.dt, &self.now, &mut self.next).map(|_| ())
         };
-        stepped.map_err(|source| StepError::Solver { step: self.step + 1, time: t, source })?;
+        stepped.map_err(|source| StepError::Solver {
+            step: self.step + 1,
+            time: (self.step + 1) as f64 * self.dt,
+            source,
+        })?;
         self.touched.fill(false);
         let constraints_changed = self.apply_constraints();
         if constraints_changed {
@@ -776,7 +748,7 @@ impl Flex3dWorld {
         let gravity = DVec3::ZERO;
         let springs = self.bounded_springs.iter().copied();
         Ok(self.bounds.check(
-            self.step as u64,
+            self.step,
             self.time(),
             &self.now.x,
             &self.now.v,
@@ -805,7 +777,7 @@ impl Flex3dWorld {
     /// Returns whether any pinned particle's velocity changed (a window opened or closed).
     fn apply_constraints(&mut self) -> bool {
         let mut changed = false;
-        let s0 = self.step; // the step starting at t = s0·Δt
+        let s0 = self.step as usize; // the step starting at t = s0·Δt
         for (pins, windows) in self.pinned_of_surface.iter().zip(&self.windows) {
             let mut u = DVec3::ZERO;
             let mut jump = DVec3::ZERO;
@@ -1012,25 +984,24 @@ impl Flex3dWorld {
         self.stepper.integrator()
     }
 
-    /// Steps until `steps_taken() == target` (no-op if already there or past it).
-    pub fn run_to_step(&mut self, target: usize) -> Result<(), StepError> {
+    /// Steps until `steps() == target` (no-op if already there or past it).
+    pub fn run_to_step(&mut self, target: u64) -> Result<(), StepError> {
         while self.step < target {
             self.step()?;
         }
         Ok(())
     }
 
-    fn check_finite(&self) -> Result<(), NonFiniteError> {
+    fn check_finite(&self) -> Result<(), NonFinite> {
         let bad = self.now.x.iter().zip(&self.now.v).position(|(x, v)| !(x.is_finite() && v.is_finite()));
         let Some(p) = bad else { return Ok(()) };
         let s = self.surfaces.iter().find(|s| s.range().contains(&p)).expect("every particle has a surface");
         let local = p - s.offset;
-        Err(NonFiniteError {
+        Err(NonFinite {
             step: self.step,
             time: self.time(),
-            surface: s.name.clone(),
-            row: local / s.cols,
-            col: local % s.cols,
+            particle: p,
+            place: Some(GridPlace { surface: s.name.clone(), row: local / s.cols, col: local % s.cols }),
         })
     }
 

@@ -27,10 +27,12 @@ use anima_geom::remesh::sizing::{
 };
 use anima_geom::remesh::{AdaptiveMesh, ContourRule, NONE, RegionRemeshing, Subdivision, border_density};
 use anima_geom::{DVec3, MaterialMesh, Solid};
+use anima_ode::Stepper;
 
-use super::cloth::{OliveiraCloth, StepError, StepReport};
+use super::cloth::{OliveiraCloth, StepReport};
 use super::contact::{first_hit, vertex_normals};
 use super::criteria::{OliveiraRemeshing, edge_components, face_edge_keys, select_edges};
+use crate::error::StepError;
 
 /// Parameters of the 1-to-4 baseline (Table 5.5, "both methods" and "1-to-4 only").
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -259,6 +261,40 @@ impl AdaptiveCloth {
 
     pub fn cloth(&self) -> &OliveiraCloth {
         &self.cloth
+    }
+
+    /// The simulated time, s ([`OliveiraCloth::time`]).
+    pub fn time(&self) -> f64 {
+        self.cloth.time()
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.cloth.steps()
+    }
+
+    /// The step the next call to [`AdaptiveCloth::step`] takes, s ([`OliveiraCloth::dt`]).
+    pub fn dt(&self) -> f64 {
+        self.cloth.dt()
+    }
+
+    /// The particles of the current mesh (a remeshing pass changes their number and order).
+    pub fn positions(&self) -> &[DVec3] {
+        self.cloth.positions()
+    }
+
+    pub fn velocities(&self) -> &[DVec3] {
+        self.cloth.velocities()
+    }
+
+    /// The current mesh's triangles (particle indices).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        self.cloth.triangles()
+    }
+
+    /// The cloth's integrator, to configure its solver.
+    pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
+        self.cloth.stepper_mut()
     }
 
     /// Replaces the cloth's positions and velocities ([`OliveiraCloth::set_state`]); the remesher

@@ -15,8 +15,9 @@ use super::forces::ClothModel;
 use super::material::Material;
 use super::scene::{Centre, Height, OliveiraScene, Options, ShapeDesc, StepRule, UpAxis};
 use super::springs::Springs;
-use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
+use crate::bounds::{Bounds, BoundsWatch, Defaults};
 use crate::contact_mode::ContactMode;
+use crate::error::{NonFinite, StepError};
 use crate::membrane::{Membrane, MembraneError, MembraneMaterial};
 use crate::self_collision::{
     OBJECT_ROUNDS, SelfCollision, SelfCollisionMode, SelfCollisionResponse, SelfCollisionStats,
@@ -50,18 +51,6 @@ pub const MAX_SPLITS: u32 = 2;
 /// on the floor) stretches nothing. On the folding drape of the self-collision tests at 1/60 s, zones
 /// froze in most steps; splitting every one of them took each step down to quarters.
 pub const SPLIT_MOTION: f64 = 0.25;
-
-/// Why a step could not be completed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum StepError {
-    #[error("non-finite state at step {step} (t = {time} s): particle {vertex}")]
-    NonFinite { step: u64, time: f64, vertex: usize },
-    /// The state left its physical bounds ([`crate::bounds`]).
-    #[error(transparent)]
-    Diverged(#[from] OutOfBounds),
-    #[error(transparent)]
-    Ode(#[from] OdeError),
-}
 
 /// What one step did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -388,8 +377,8 @@ impl OliveiraCloth {
     }
 
     /// The step the next call to [`OliveiraCloth::step`] will take: the start-up step until the first
-    /// collision, then Δt = β·π·√(m_min / k^e_max) (Eq. 4.6).
-    pub fn next_dt(&self) -> f64 {
+    /// collision, then Δt = β·π·√(m_min / k^e_max) (Eq. 4.6); the scene's step for a fixed rule.
+    pub fn dt(&self) -> f64 {
         match self.rule {
             StepRule::Provot { startup_dt_s: Some(dt), .. } if self.first_collision.is_none() => dt,
             StepRule::Provot { beta, .. } => beta * PI * (self.m_min / self.k_max).sqrt(),
@@ -406,7 +395,7 @@ impl OliveiraCloth {
             let elastic = self.elastic_energy();
             self.bounds.restart(&self.now.x, &self.now.v, &self.model.mass, self.gravity, elastic);
         }
-        let dt = self.next_dt();
+        let dt = self.dt();
         let hits = self.advance(dt, 0)?;
         self.steps += 1;
         let springs = &self.model.springs;
@@ -441,7 +430,8 @@ impl OliveiraCloth {
         if let Some(vertex) =
             (0..self.next.x.len()).find(|&i| !(self.next.x[i].is_finite() && self.next.v[i].is_finite()))
         {
-            return Err(StepError::NonFinite { step: self.steps + 1, time: self.time + dt, vertex });
+            let (step, time) = (self.steps + 1, self.time + dt);
+            return Err(NonFinite { step, time, particle: vertex, place: None }.into());
         }
         let held_back = match self.self_collision {
             Some(settings) => self.keep_apart(&settings, dt),
@@ -469,9 +459,15 @@ impl OliveiraCloth {
         Ok(hits)
     }
 
+    fn solver_error(&self, dt: f64, source: OdeError) -> StepError {
+        StepError::Solver { step: self.steps + 1, time: self.time + dt, source }
+    }
+
     /// The integrator's step into `next` with the objects answered after it.
     fn tentative(&mut self, dt: f64) -> Result<usize, StepError> {
-        self.stepper.step(&mut self.model, self.time, dt, &self.now, &mut self.next)?;
+        self.stepper
+            .step(&mut self.model, self.time, dt, &self.now, &mut self.next)
+            .map_err(|source| self.solver_error(dt, source))?;
         if let Some(tau) = self.options.strain_limit {
             self.limit_strain(tau, dt);
         }
@@ -511,14 +507,10 @@ impl OliveiraCloth {
             restitution: self.restitution,
             cache: &mut self.solve_cache,
         };
-        let stats = self.stepper.step_with_contacts(
-            &mut self.model,
-            &mut contacts,
-            self.time,
-            dt,
-            &self.now,
-            &mut self.next,
-        )?;
+        let stats = self
+            .stepper
+            .step_with_contacts(&mut self.model, &mut contacts, self.time, dt, &self.now, &mut self.next)
+            .map_err(|source| self.solver_error(dt, source))?;
         if let Some(tau) = self.options.strain_limit {
             self.limit_strain(tau, dt);
         }

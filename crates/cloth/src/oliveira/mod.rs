@@ -23,7 +23,7 @@ pub mod scene;
 pub mod springs;
 
 pub use adaptive::{AdaptiveCloth, AdaptiveMethod, RemeshStats, SizingRemeshing, SubdivisionRemeshing};
-pub use cloth::{BuildError, MAX_SPLITS, OliveiraCloth, SPLIT_MOTION, StepError, StepReport, place_mesh};
+pub use cloth::{BuildError, MAX_SPLITS, OliveiraCloth, SPLIT_MOTION, StepReport, place_mesh};
 pub use contact::Collider;
 pub use criteria::{CurvatureLimit, OliveiraRemeshing, ShortEdgeRule};
 pub use material::Material;

@@ -116,7 +116,7 @@ impl ThesisScene {
 
 /// Runs `world` to the end of frame `k` of `loaded`.
 pub fn run_to_frame(loaded: &LoadedFlex3d, world: &mut Flex3dWorld, k: usize) -> Result<()> {
-    Ok(world.run_to_step(loaded.scene.frame_step(k))?)
+    Ok(world.run_to_step(loaded.scene.frame_step(k) as u64)?)
 }
 
 // ---------------------------------------------------------------------------------------------- E-1
@@ -324,11 +324,11 @@ pub fn e5_wind_with(edit: impl FnOnce(&mut ModelOptions)) -> Result<E5Wind> {
         modern: None,
     };
     for k in 1..=loaded.scene.n_frames() {
-        while world.steps_taken() < loaded.scene.frame_step(k) {
+        while world.steps() < loaded.scene.frame_step(k) as u64 {
             world.step()?;
             let crossings = count_self_intersections(world.positions(), &triangles);
             if crossings > 0 {
-                out.first_crossing_step.get_or_insert(world.steps_taken());
+                out.first_crossing_step.get_or_insert(world.steps() as usize);
                 out.most_crossings = out.most_crossings.max(crossings);
             }
         }

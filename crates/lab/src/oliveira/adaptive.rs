@@ -242,7 +242,7 @@ fn run(
             p: cl.tracked_position(),
         }
     };
-    let mut samples = vec![sample(&c, c.cloth().next_dt())];
+    let mut samples = vec![sample(&c, c.cloth().dt())];
     let mut points = Vec::new();
     let mut frames = Vec::new();
     let mut next = 0;
@@ -305,7 +305,7 @@ fn run(
         failure = Some(e.to_string());
     }
     let wall_s = start.elapsed().as_secs_f64();
-    samples.push(sample(&c, c.cloth().next_dt()));
+    samples.push(sample(&c, c.cloth().dt()));
     let stats = (!matches!(kind, Kind::Uniform(..))).then(|| c.stats());
     let cloth = c.cloth();
     Ok(Run {

@@ -77,7 +77,7 @@ fn run_scene(repo: &Repo, test: &Test, n: usize, label: &'static str, log: Optio
     let c = cloth.cloth();
     let (nv, ne, nf) = (c.mesh().n_vertices(), c.mesh().n_edges(), c.mesh().n_faces());
     let (m_min, k_max) = (c.min_mass(), c.max_stiffness());
-    let mut samples = vec![Sample { t: 0.0, dt: c.next_dt(), p: c.tracked_position() }];
+    let mut samples = vec![Sample { t: 0.0, dt: c.dt(), p: c.tracked_position() }];
     let mut snapshots = Vec::new();
     let mut next_snapshot = 0;
     let mut step_wall = 0.0;
@@ -137,7 +137,7 @@ fn run_scene(repo: &Repo, test: &Test, n: usize, label: &'static str, log: Optio
         hits: c.total_hits(),
         m_min,
         k_max,
-        dt_final: c.next_dt(),
+        dt_final: c.dt(),
         end_time: c.time(),
         samples,
         snapshots,

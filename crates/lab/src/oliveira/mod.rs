@@ -11,8 +11,9 @@ use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use anima_cloth::StepError;
 use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, StepError, StepReport, criteria::interpolate_at,
+    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, StepReport, criteria::interpolate_at,
 };
 use anima_geom::query::tessellate;
 use anima_geom::{DVec2, DVec3, Solid, TriangleMesh};

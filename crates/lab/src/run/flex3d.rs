@@ -2,7 +2,9 @@
 
 use std::time::Instant;
 
-use anima_cloth::flex3d::{Flex3dWorld, NonFiniteError, StepError};
+use anima_cloth::StepError;
+use anima_cloth::error::NonFinite;
+use anima_cloth::flex3d::Flex3dWorld;
 use anima_geom::obt::{ObtObject, write_obt};
 use anima_geom::{DVec3, obj::write_obj};
 use anima_scene::LoadedFlex3d;
@@ -38,9 +40,11 @@ pub struct NonFiniteReport {
     pub col: usize,
 }
 
-impl From<&NonFiniteError> for NonFiniteReport {
-    fn from(e: &NonFiniteError) -> Self {
-        Self { step: e.step, time: e.time, surface: e.surface.clone(), row: e.row, col: e.col }
+impl From<&NonFinite> for NonFiniteReport {
+    fn from(e: &NonFinite) -> Self {
+        let place = e.place.as_ref().expect("FLEX3D places every particle on its surface's grid");
+        let (surface, row, col) = (place.surface.clone(), place.row, place.col);
+        Self { step: e.step as usize, time: e.time, surface, row, col }
     }
 }
 
@@ -140,7 +144,7 @@ pub fn run(
     let mut output = OutputClock::default();
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
-        if let Err(e) = step_to(&mut world, target, progress) {
+        if let Err(e) = step_to(&mut world, target as u64, progress) {
             failure = Some(e);
             break;
         }
@@ -176,7 +180,7 @@ pub fn run(
     watch.look(world.positions(), &triangles);
     let d = world.diagnostics();
     let counts = world.collision_counts();
-    let steps = world.steps_taken();
+    let steps = world.steps() as usize;
     if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
         for w in e.write(dir)? {
             progress.warn(&w);
@@ -228,13 +232,13 @@ pub fn run(
     Ok((summary, world))
 }
 
-fn step_to(world: &mut Flex3dWorld, target: usize, progress: &mut dyn Progress) -> Result<(), StepError> {
+fn step_to(world: &mut Flex3dWorld, target: u64, progress: &mut dyn Progress) -> Result<(), StepError> {
     // Report in chunks so that the bar costs nothing measurable.
-    const CHUNK: usize = 1000;
-    while world.steps_taken() < target {
-        let next = (world.steps_taken() + CHUNK).min(target);
+    const CHUNK: u64 = 1000;
+    while world.steps() < target {
+        let next = (world.steps() + CHUNK).min(target);
         world.run_to_step(next)?;
-        progress.advance(world.steps_taken() as u64);
+        progress.advance(world.steps());
     }
     Ok(())
 }

@@ -4,8 +4,9 @@
 use std::path::Path;
 use std::time::Instant;
 
+use anima_cloth::StepError;
 use anima_cloth::membrane::{MembraneSheetSpec, MembraneSim};
-use anima_cloth::network_sim::{NetworkSim, RunError};
+use anima_cloth::network_sim::NetworkSim;
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3, grid_triangles};
 use anima_ode::{OdeSystem, State, StepControl, Stepper, integrate};
@@ -163,14 +164,14 @@ pub fn run(
             } else {
                 ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
             };
-            if let Err(e) = sim.run(target.saturating_sub(sim.steps_taken())) {
+            if let Err(e) = sim.run(target.saturating_sub(sim.steps() as usize)) {
                 diverged = e.is_non_finite();
                 error = Some(e.to_string());
                 break;
             }
             frames = k;
             watch.look(&sim.state().x, &triangles);
-            progress.advance(sim.steps_taken() as u64);
+            progress.advance(sim.steps());
             output.time(|| -> Result<()> {
                 if let Some(e) = &mut export {
                     e.deforming_frame(k, sim.time(), |_| &sim.state().x[..]);
@@ -192,7 +193,7 @@ pub fn run(
     progress.end();
     let x = &sim.state().x;
     watch.look(x, &triangles);
-    let steps = sim.steps_taken();
+    let steps = sim.steps();
     if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
         for w in e.write(dir)? {
             progress.warn(&w);
@@ -206,7 +207,7 @@ pub fn run(
     let summary = Summary {
         scene: label.to_owned(),
         kind: "sheet",
-        steps: steps as u64,
+        steps,
         frames,
         simulated_seconds: sim.time(),
         wall_seconds,
@@ -225,7 +226,7 @@ pub fn run(
             particles: n,
             springs: n_springs,
             triangles: n_triangles,
-            ns_per_particle_step: (wall_seconds - output_seconds) * 1e9 / (steps.max(1) * n) as f64,
+            ns_per_particle_step: (wall_seconds - output_seconds) * 1e9 / (steps.max(1) as usize * n) as f64,
             threads,
             center_of_mass: sim.centre_of_mass(x).to_array(),
             rms_to_reference: opts.reference.as_ref().map(|r| {
@@ -293,7 +294,7 @@ impl Cloth {
         })
     }
 
-    pub(crate) fn run(&mut self, steps: usize) -> Result<(), RunError> {
+    pub(crate) fn run(&mut self, steps: usize) -> Result<(), StepError> {
         match self {
             Cloth::Springs(s) => s.run(steps),
             Cloth::Membrane(m) => m.run(steps),
@@ -342,10 +343,10 @@ impl Cloth {
         }
     }
 
-    pub(crate) fn steps_taken(&self) -> usize {
+    pub(crate) fn steps(&self) -> u64 {
         match self {
-            Cloth::Springs(s) => s.steps_taken(),
-            Cloth::Membrane(m) => m.steps_taken(),
+            Cloth::Springs(s) => s.steps(),
+            Cloth::Membrane(m) => m.steps(),
         }
     }
 
