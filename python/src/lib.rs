@@ -12,9 +12,9 @@ use std::path::{Path, PathBuf};
 use anima_control::optimise::{Optimiser, RunLog, resume, run};
 use anima_control::{Controller, ParamId};
 use anima_geom::DVec3;
-use anima_lab::run::{Overrides, RunOptions, Silent, SolveOptions};
-use anima_lab::sim::{ClothSim, FigureSim};
 use anima_ode::Integrator;
+use anima_run::run::{Overrides, RunOptions, Silent, SolveOptions};
+use anima_run::sim::{ClothSim, FigureSim};
 use anima_scene::optimisation::ObjectiveSpec;
 use anima_scene::sheet::SheetScene;
 use anima_scene::{LoadOptions, Scene};
@@ -414,7 +414,7 @@ fn run_json(
 ) -> PyResult<String> {
     let export = match export {
         None => None,
-        Some("gltf") => Some(anima_lab::run::export::Export::Gltf),
+        Some("gltf") => Some(anima_run::run::export::Export::Gltf),
         Some(other) => return Err(value_error(format!("expected the export `gltf`, found `{other}`"))),
     };
     if export.is_some() && out.is_none() {
@@ -431,9 +431,9 @@ fn run_json(
     let label = path.display().to_string();
     let summary = py
         .detach(|| {
-            let summary = anima_lab::run::run(&scene, &label, &opts, &mut Silent)?;
+            let summary = anima_run::run::run(&scene, &label, &opts, &mut Silent)?;
             if let Some(dir) = &out {
-                anima_lab::run::write_summary(&dir.join("summary.json"), &summary)?;
+                anima_run::run::write_summary(&dir.join("summary.json"), &summary)?;
             }
             Ok(summary)
         })
@@ -454,14 +454,14 @@ fn walk_json(py: Python<'_>, controller: PathBuf, iterations: u64) -> PyResult<S
         .map_err(|e| scene_error(format!("{}: {e}", controller.display())))?;
     let c = Controller::from_ron(&text, &anima_character::procedures())
         .map_err(|e| scene_error(format!("{}: {e}", controller.display())))?;
-    let rules = anima_lab::nunes::WalkRules::default();
+    let rules = anima_run::objectives::WalkRules::default();
     let outcome = py
-        .detach(|| anima_lab::nunes::walk(c, iterations, &rules, &[], |_| ()))
+        .detach(|| anima_run::objectives::walk(c, iterations, &rules, &[], |_| ()))
         .map_err(|e| simulation_error(e.into()))?;
     #[derive(serde::Serialize)]
     struct Walk {
         #[serde(flatten)]
-        outcome: anima_lab::nunes::WalkOutcome,
+        outcome: anima_run::objectives::WalkOutcome,
         fitness: f64,
     }
     serde_json_text(&Walk { fitness: outcome.fitness(), outcome })
@@ -487,7 +487,7 @@ impl Evaluator {
         if x.len() != self.ids.len() {
             return Err(value_error(format!("x: expected {} parameters, found {}", self.ids.len(), x.len())));
         }
-        Ok(py.detach(|| anima_lab::optimise::fitness(&self.objective, &self.controller, &self.ids, &x)))
+        Ok(py.detach(|| anima_run::optimise::fitness(&self.objective, &self.controller, &self.ids, &x)))
     }
 
     #[staticmethod]
@@ -537,7 +537,7 @@ impl Optimisation {
         if ids.is_empty() {
             return Err(value_error(format!("{}: the selection names no free parameter", spec.display())));
         }
-        let opt = anima_lab::optimise::optimiser(&loaded, &ids).map_err(value_error)?;
+        let opt = anima_run::optimise::optimiser(&loaded, &ids).map_err(value_error)?;
         let space = loaded.controller.space(&ids);
         Ok(Self {
             opt,
@@ -641,7 +641,7 @@ impl Optimisation {
         let budget = budget.unwrap_or(self.budget);
         let (opt, log, e) = (&mut self.opt, &mut self.log, &self.evaluator);
         py.detach(|| {
-            let objective = |x: &[f64]| anima_lab::optimise::fitness(&e.objective, &e.controller, &e.ids, x);
+            let objective = |x: &[f64]| anima_run::optimise::fitness(&e.objective, &e.controller, &e.ids, x);
             run(opt.as_mut(), &objective, budget, log);
         });
         Ok(())
@@ -662,7 +662,7 @@ impl Optimisation {
     /// Writes the log to `path`, whole (a temporary file, then a rename).
     fn save_log(&self, path: PathBuf) -> PyResult<()> {
         let text = self.log_ron()?;
-        anima_lab::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))
+        anima_run::output::write_atomic(&path, |w| Ok(w.write_all(text.as_bytes())?))
             .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))
     }
 

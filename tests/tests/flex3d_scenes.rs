@@ -34,7 +34,7 @@ fn committed_ron_scenes_are_what_convert_writes() {
         assert_eq!(
             fresh,
             committed,
-            "assets/flex3d/{}.ron is stale: run `cargo run --release -p anima -- convert assets/flex3d/{} -o assets/flex3d/{}.ron --gravity {}`",
+            "assets/flex3d/{}.ron is stale: run `cargo run --release -p anima-cli -- convert assets/flex3d/{} -o assets/flex3d/{}.ron --gravity {}`",
             scene.slug(),
             scene.script(),
             scene.slug(),

@@ -171,7 +171,7 @@ fn main() -> Result<()> {
             // The binary a user runs, built as they build it.
             let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
             let status = std::process::Command::new(cargo)
-                .args(["build", "--release", "--quiet", "-p", "anima"])
+                .args(["build", "--release", "--quiet", "-p", "anima-cli"])
                 .current_dir(repo.root())
                 .status()?;
             anyhow::ensure!(status.success(), "building anima failed");

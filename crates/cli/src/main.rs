@@ -9,11 +9,11 @@ use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
 use anima_cloth::self_collision::SelfCollisionMode;
 use anima_geom::DVec3;
-use anima_lab::optimise::{OptimiseOptions, optimise};
-use anima_lab::run::{
+use anima_ode::{Integrator, LinearSolver};
+use anima_run::optimise::{OptimiseOptions, optimise};
+use anima_run::run::{
     Detail, Export, Flex3dSwitches, Overrides, RunOptions, SolveOptions, Summary, write_summary,
 };
-use anima_ode::{Integrator, LinearSolver};
 use anima_scene::{LoadOptions, LoadedFlex3d, Scene};
 use anyhow::{Context, Result};
 use clap::builder::PossibleValue;
@@ -428,14 +428,14 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     }
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.
-    anima_lab::output::check_writable(
+    anima_run::output::check_writable(
         summary_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")),
     )?;
     if !args.quiet {
         eprintln!("anima: {label} — {}", describe(&scene));
     }
     let mut bar = Bar::new(!args.quiet);
-    let summary = anima_lab::run::run(&scene, &label, &opts, &mut bar)?;
+    let summary = anima_run::run::run(&scene, &label, &opts, &mut bar)?;
     write_summary(&summary_path, &summary)?;
     if !args.quiet {
         report(&summary);
@@ -602,7 +602,7 @@ fn convert_command(input: &Path, output: Option<PathBuf>, force: bool, gravity: 
     let bytes = std::fs::read(input).with_context(|| format!("reading {}", input.display()))?;
     let name = input.display().to_string();
     let ron = anima_scene::convert_par_to_ron(&bytes, &name, gravity.unwrap_or(FLEX3D_GRAVITY))?;
-    anima_lab::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;
+    anima_run::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;
     eprintln!("anima: wrote {}", out.display());
     Ok(())
 }
@@ -627,7 +627,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     // An interrupt leaves no half-written temporary file behind; every finished file is whole already.
     let _ = ctrlc::set_handler(|| {
-        anima_lab::output::remove_temporaries();
+        anima_run::output::remove_temporaries();
         eprintln!("\nanima: interrupted");
         std::process::exit(130);
     });

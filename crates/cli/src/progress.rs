@@ -1,7 +1,7 @@
 //! The progress bar of `anima run` and `anima optimise`: shown only on a terminal, updated in steps the
 //! runs choose so that it costs nothing measurable; warnings printed above it.
 
-use anima_lab::run::Progress;
+use anima_run::run::Progress;
 
 /// An indicatif bar, or nothing when standard error is not a terminal or `--quiet` is given (warnings
 /// are printed either way unless quiet).

@@ -1,24 +1,24 @@
-//! anima's experiments and runs: every thesis experiment and objective as a function, and the run loop
-//! of every kind of scene.
+//! anima's experiments: every thesis experiment as a function, with the reports that set anima's numbers
+//! beside the theses', the figures and the benchmarks.
 //!
 //! # What this crate is
 //!
-//! - [`run`]: a loaded scene of any kind ([`anima_scene::Scene`]) run to its end, with frames, pictures
-//!   and one JSON [`run::Summary`] — what `anima run` does.
-//! - [`optimise`]: a controller optimisation from a spec file, logged and resumable — what
-//!   `anima optimise` does.
 //! - [`flex3d`], [`oliveira`], [`nunes`]: the experiments of the three theses (Nedel 1993's E-1…E-8,
 //!   Oliveira 2013's Tests I–III on static, implicit and adaptive meshes, Nunes 2006's walker, thrower
-//!   and backflip), their evaluators and objectives, the reports that set our numbers beside the
-//!   theses', and the figures; [`bench`](mod@bench): speed against error for every integrator.
+//!   and backflip), the reports that set our numbers beside the theses', and the figures;
+//!   [`bench`](mod@bench), [`scale`] and [`peers`]: speed against error, at users' sizes and beside
+//!   other simulators.
+//! - The runtime it runs them on is `anima-run`'s ([`run`](mod@run), [`sim`], [`optimise`],
+//!   [`output`], [`picture`], re-exported here): the experiments run scenes as `anima run` does.
 //! - [`report`]: reports as documents of named sections, so a partial run updates its own sections;
 //!   [`repo`]: where assets are read and reports, figures and caches are written.
 //!
 //! # What it is not
 //!
 //! No physics of its own (the models are `anima-cloth`'s and `anima-body`'s), no file formats (scene
-//! files are `anima-scene`'s), no command line: `anima` and `cargo xtask` are thin callers of this
-//! crate, and the integration tests check the numbers the reports print through the same functions.
+//! files are `anima-scene`'s), no command line, and nothing the `anima` command or the Python package
+//! needs (that is `anima-run`): `cargo xtask` is a thin caller of this crate, and the integration tests
+//! check the numbers the reports print through the same functions.
 //! It writes files only where its caller says: a run's output folder, or the repository a [`repo::Repo`]
 //! names.
 //!
@@ -46,12 +46,9 @@ pub mod figures;
 pub mod flex3d;
 pub mod nunes;
 pub mod oliveira;
-pub mod optimise;
-pub mod output;
 pub mod peers;
-pub mod picture;
 pub mod repo;
 pub mod report;
-pub mod run;
 pub mod scale;
-pub mod sim;
+
+pub use anima_run::{optimise, output, picture, run, sim};

@@ -7,16 +7,12 @@ pub mod drapes;
 pub mod implicit;
 pub mod membrane;
 
-use std::ops::ControlFlow;
 use std::path::PathBuf;
-use std::time::Instant;
 
-use anima_cloth::StepError;
-use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, StepReport, criteria::interpolate_at,
-};
-use anima_geom::query::tessellate;
-use anima_geom::{DVec2, DVec3, Solid, TriangleMesh};
+use anima_cloth::oliveira::{OliveiraCloth, criteria::interpolate_at};
+use anima_geom::{DVec2, DVec3};
+
+pub use anima_run::drape::{Ended, object_meshes, run_drape, unremeshed};
 
 use crate::repo::Repo;
 
@@ -112,44 +108,6 @@ impl DrapeTest {
     }
 }
 
-/// How a drape run ended.
-#[derive(Debug)]
-pub enum Ended {
-    /// It reached the end time.
-    Done,
-    /// The observer stopped it (a wall-time cap, say).
-    Stopped,
-    /// A step failed (a non-finite state): the run stops there.
-    Failed(StepError),
-}
-
-/// The one drape loop: steps `cloth` (static or remeshed) until `t_end`, handing every step to
-/// `observe` with its report and its own wall time, s (the observer's work is not in it). The observer
-/// may stop the run.
-pub fn run_drape(
-    cloth: &mut AdaptiveCloth,
-    t_end: f64,
-    mut observe: impl FnMut(&AdaptiveCloth, &StepReport, f64) -> ControlFlow<()>,
-) -> Ended {
-    while cloth.cloth().time() < t_end {
-        let start = Instant::now();
-        let report = match cloth.step() {
-            Ok(r) => r,
-            Err(e) => return Ended::Failed(e),
-        };
-        let wall = start.elapsed().as_secs_f64();
-        if observe(cloth, &report, wall).is_break() {
-            return Ended::Stopped;
-        }
-    }
-    Ended::Done
-}
-
-/// A static cloth in the run loop's wrapper (no remesher: the steps are the cloth's own).
-pub fn unremeshed(cloth: OliveiraCloth, gravity: DVec3) -> AdaptiveCloth {
-    AdaptiveCloth::new(cloth, gravity, AdaptiveMethod::Static)
-}
-
 /// The 25 material points of the coarse 5 × 5 grid, in material coordinates (m).
 pub fn material_points() -> Vec<DVec2> {
     (0..5).flat_map(|r| (0..5).map(move |c| DVec2::new(c as f64 * 0.25, r as f64 * 0.25))).collect()
@@ -173,19 +131,4 @@ pub fn rms(a: &[Vec<DVec3>], b: &[Vec<DVec3>]) -> f64 {
         }
     }
     (s / n.max(1) as f64).sqrt()
-}
-
-/// Triangle meshes of the objects, for pictures, each with whether it is unbounded (a half-space,
-/// drawn as a square around the cloth).
-pub fn object_meshes(cloth: &OliveiraCloth) -> Vec<(TriangleMesh, bool)> {
-    cloth
-        .colliders()
-        .iter()
-        .map(|c| match &c.solid {
-            Solid::Mesh(m) => (m.to_mesh(), false),
-            Solid::Sphere(s) => (tessellate::sphere(s, 64), false),
-            Solid::Cylinder(c) => (tessellate::cylinder(c, 96), false),
-            Solid::HalfSpace(h) => (tessellate::plane_patch(h, DVec3::ZERO, 0.9), true),
-        })
-        .collect()
 }

@@ -11,7 +11,7 @@ use anima_geom::{DVec3, TriangleMesh};
 use anima_scene::Scene;
 use anyhow::{Context, Result, bail};
 
-use crate::oliveira::object_meshes;
+use crate::drape::object_meshes;
 use crate::run::SolveOptions;
 use crate::run::body::{Figures, Posed, build_character};
 use crate::run::sheet::Cloth;

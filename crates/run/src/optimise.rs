@@ -13,7 +13,7 @@ use anima_control::{Controller, ParamId};
 use anima_scene::optimisation::{LoadedOptimisation, ObjectiveSpec, OptimiserSpec};
 use anyhow::{Context, Result, bail};
 
-use crate::nunes;
+use crate::objectives;
 use crate::output::write_atomic;
 use crate::run::Progress;
 
@@ -23,11 +23,13 @@ pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamI
     c.apply(ids, x);
     match *objective {
         ObjectiveSpec::Walk { iterations } => {
-            nunes::walk(c, iterations, &nunes::WalkRules::default(), &[], |_| ()).map_or(0.0, |o| o.fitness())
+            objectives::walk(c, iterations, &objectives::WalkRules::default(), &[], |_| ())
+                .map_or(0.0, |o| o.fitness())
         }
         ObjectiveSpec::Throw { iterations, height_cap } => {
-            let cap = height_cap.then(|| nunes::throw_height_cap(&nunes::BASKET));
-            nunes::throw(c, &nunes::BASKET, iterations, |_| ()).map_or(0.0, |o| o.fitness_capped(cap))
+            let cap = height_cap.then(|| objectives::throw_height_cap(&objectives::BASKET));
+            objectives::throw(c, &objectives::BASKET, iterations, |_| ())
+                .map_or(0.0, |o| o.fitness_capped(cap))
         }
     }
 }

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use super::export::GltfExport;
 use super::{Detail, OutputClock, Progress, RunOptions, Summary};
-use crate::nunes::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
+use crate::objectives::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
 
 /// Per-model numbers of a run.
@@ -184,21 +184,25 @@ pub fn run_character(
     let mut c = build_character(loaded)?;
     enum Tracker {
         None,
-        Walk(nunes::WalkTracker),
-        Throw(nunes::ThrowTracker),
-        Flip(nunes::FlipTracker),
+        Walk(objectives::WalkTracker),
+        Throw(objectives::ThrowTracker),
+        Flip(objectives::FlipTracker),
     }
     let mut tracker = match scene.evaluation {
         Evaluation::None => Tracker::None,
         Evaluation::Walk => {
-            let rules = nunes::WalkRules { window: 0, stop_on_failure: true, ..nunes::WalkRules::default() };
-            Tracker::Walk(nunes::WalkTracker::new(&c, &rules))
+            let rules = objectives::WalkRules {
+                window: 0,
+                stop_on_failure: true,
+                ..objectives::WalkRules::default()
+            };
+            Tracker::Walk(objectives::WalkTracker::new(&c, &rules))
         }
-        Evaluation::Throw => match nunes::ThrowTracker::new(&c, &nunes::BASKET)? {
+        Evaluation::Throw => match objectives::ThrowTracker::new(&c, &objectives::BASKET)? {
             Some(t) => Tracker::Throw(t),
             None => anyhow::bail!("{label}: a throw evaluation needs a body `ball` on the first model"),
         },
-        Evaluation::Backflip => match nunes::FlipTracker::new(&c) {
+        Evaluation::Backflip => match objectives::FlipTracker::new(&c) {
             Some(t) => Tracker::Flip(t),
             None => anyhow::bail!(
                 "{label}: a backflip evaluation needs two models, the first with an abdomen and a pelvis"
@@ -557,7 +561,7 @@ mod tests {
     use anima_scene::{LoadOptions, Scene, load};
 
     fn asset(rel: &str) -> std::path::PathBuf {
-        crate::repo::Repo::here().assets(rel)
+        crate::test_asset(rel)
     }
 
     fn body(rel: &str) -> LoadedBody {

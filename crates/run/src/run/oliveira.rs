@@ -1,5 +1,5 @@
 //! Running an Oliveira 2013 drape (`OliveiraScene(…)`, or `AdaptiveOliveiraScene(…)` with a remesher):
-//! the one drape loop of [`crate::oliveira::run_drape`], OBJ frames at 30 per second (the mesh of each
+//! the one drape loop of [`crate::drape::run_drape`], OBJ frames at 30 per second (the mesh of each
 //! frame, since a remesher changes it), pictures with the objects and the mesh drawn, and the summary's
 //! numbers.
 
@@ -20,7 +20,7 @@ use super::export::GltfExport;
 use super::{
     CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
 };
-use crate::oliveira::{Ended, object_meshes, run_drape};
+use crate::drape::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
 
 /// Frames written per simulated second (the scene format has no frame rate: a drape is a few tenths of
