@@ -14,6 +14,7 @@
 
 pub mod adaptive;
 pub mod bending;
+mod builder;
 mod cloth;
 pub mod contact;
 pub mod criteria;
@@ -23,6 +24,7 @@ pub mod scene;
 pub mod springs;
 
 pub use adaptive::{AdaptiveCloth, AdaptiveMethod, RemeshStats, SizingRemeshing, SubdivisionRemeshing};
+pub use builder::ClothBuilder;
 pub use cloth::{BuildError, MAX_SPLITS, OliveiraCloth, SPLIT_MOTION, StepReport, place_mesh};
 pub use contact::Collider;
 pub use criteria::{CurvatureLimit, OliveiraRemeshing, ShortEdgeRule};

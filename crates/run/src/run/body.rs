@@ -120,8 +120,9 @@ impl Posed {
     }
 }
 
-/// A character scene's figures with their controller, ready to step.
-pub(crate) fn build_character(loaded: &LoadedCharacter) -> Result<Character> {
+/// A character scene's figures with their controller, ready to step: the world settings, skeletons,
+/// placements and controller the scene file names (`examples/walker.rs`).
+pub fn build_character(loaded: &LoadedCharacter) -> Result<Character> {
     let scene = &loaded.scene;
     let mut world = World::new(scene.world)?;
     for (m, sk) in scene.models.iter().zip(&loaded.skeletons) {
