@@ -7,6 +7,8 @@
 //!   pictures, a glTF export and one JSON [`run::Summary`];
 //! - [`sim`]: a scene as an object its caller steps and whose state it reads and writes ([`sim::ClothSim`],
 //!   [`sim::FigureSim`]);
+//! - [`Simulation`] and [`Deformable`]: one contract for everything anima steps (every cloth model,
+//!   posed figures, a character) and for what has particles;
 //! - [`optimise`]: a controller optimisation from a spec file, logged and resumable;
 //! - [`objectives`]: the objectives a spec can name (walking, throwing, the backflip), the figures they
 //!   are measured on, and their trackers, which a character scene's run reports;
@@ -40,6 +42,9 @@ pub mod output;
 pub mod picture;
 pub mod run;
 pub mod sim;
+pub mod simulation;
+
+pub use simulation::{Deformable, Simulation};
 
 /// The repository's `assets/` folder, for the tests.
 #[cfg(test)]

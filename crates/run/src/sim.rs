@@ -5,8 +5,8 @@
 
 use anima_body::{BodyPose, World};
 use anima_character::Character;
+use anima_cloth::StepError;
 use anima_cloth::flex3d::Flex3dWorld;
-use anima_cloth::oliveira::AdaptiveCloth;
 use anima_geom::{DVec3, TriangleMesh};
 use anima_scene::Scene;
 use anyhow::{Context, Result, bail};
@@ -15,6 +15,11 @@ use crate::drape::object_meshes;
 use crate::run::SolveOptions;
 use crate::run::body::{Figures, Posed, build_character};
 use crate::run::sheet::Cloth;
+use crate::simulation::Deformable;
+
+/// Any cloth model, through the contract every one keeps (sendable: the Python package steps it with
+/// the interpreter's lock released).
+pub(crate) type ClothModel = Box<dyn Deformable<Error = StepError> + Send + Sync>;
 
 /// A cloth scene of any kind (a sheet, FLEX3D surfaces, an Oliveira drape, remeshed or not), ready to
 /// step.
@@ -28,51 +33,31 @@ pub struct ClothSim {
     kind: &'static str,
 }
 
-#[derive(Debug)]
-enum ClothModel {
-    Sheet(Box<Cloth>),
-    Flex3d(Box<Flex3dWorld>),
-    Oliveira(Box<AdaptiveCloth>),
-}
-
 impl ClothSim {
     /// Builds a cloth scene as `anima run` would, with `solve`'s choices for the implicit integrators.
     /// Figures are not cloth: [`FigureSim::new`] takes them.
     pub fn new(scene: &Scene, solve: &SolveOptions) -> Result<Self> {
-        Ok(match scene {
+        let (mut model, triangles, obstacles, kind): (ClothModel, _, _, _) = match scene {
             Scene::Sheet(s) => {
-                let (mut sim, triangles) = Cloth::new(s, false)?;
-                solve.configure(sim.stepper_mut());
-                Self {
-                    model: ClothModel::Sheet(Box::new(sim)),
-                    triangles,
-                    obstacles: Vec::new(),
-                    kind: "sheet",
-                }
+                let (sim, triangles) = Cloth::new(s, false)?;
+                (sim.into_model(), triangles, Vec::new(), "sheet")
             }
             Scene::Flex3d(l) => {
-                let mut world = Flex3dWorld::new(&l.scene, l.meshes()).context("building the scene")?;
-                solve.configure(world.stepper_mut());
-                let triangles = world.all_triangles();
-                let obstacles = world.objects().to_vec();
-                Self { model: ClothModel::Flex3d(Box::new(world)), triangles, obstacles, kind: "flex3d" }
+                let world = Flex3dWorld::new(&l.scene, l.meshes()).context("building the scene")?;
+                let (triangles, obstacles) = (world.all_triangles(), world.objects().to_vec());
+                (Box::new(world), triangles, obstacles, "flex3d")
             }
             Scene::Oliveira(l) => {
-                let mut cloth = l.build().context("building the drape")?;
-                solve.configure(cloth.stepper_mut());
+                let cloth = l.build().context("building the drape")?;
                 let obstacles = object_meshes(&cloth).into_iter().map(|(m, _)| m).collect();
-                let cloth = l.with_remesher(cloth);
-                Self {
-                    model: ClothModel::Oliveira(Box::new(cloth)),
-                    triangles: Vec::new(),
-                    obstacles,
-                    kind: "oliveira",
-                }
+                (Box::new(l.with_remesher(cloth)), Vec::new(), obstacles, "oliveira")
             }
             Scene::Body(_) | Scene::Character(_) => {
                 bail!("a {} scene holds figures, not cloth", scene.kind().name())
             }
-        })
+        };
+        solve.configure(model.stepper_mut());
+        Ok(Self { model, triangles, obstacles, kind })
     }
 
     /// `sheet`, `flex3d` or `oliveira`.
@@ -83,23 +68,12 @@ impl ClothSim {
     /// One step (for Oliveira drapes, of the step the scene's rule chooses, then a remeshing pass when
     /// one is due). A non-finite state is an error naming the step where it appeared.
     pub fn step(&mut self) -> Result<()> {
-        match &mut self.model {
-            ClothModel::Sheet(s) => s.run(1)?,
-            ClothModel::Flex3d(w) => w.step()?,
-            ClothModel::Oliveira(c) => {
-                c.step()?;
-            }
-        }
-        Ok(())
+        Ok(self.model.step()?)
     }
 
     /// `n` steps, stopping at the first failure.
     pub fn run(&mut self, n: usize) -> Result<()> {
-        match &mut self.model {
-            ClothModel::Sheet(s) => Ok(s.run(n)?),
-            ClothModel::Flex3d(w) => Ok(w.run_to_step(w.steps() + n as u64)?),
-            ClothModel::Oliveira(_) => (0..n).try_for_each(|_| self.step()),
-        }
+        Ok(self.model.run(n as u64)?)
     }
 
     /// Steps until the simulated time reaches `t` (at least `t` − 10⁻¹² s; a step is never cut).
@@ -114,45 +88,25 @@ impl ClothSim {
     }
 
     pub fn time(&self) -> f64 {
-        match &self.model {
-            ClothModel::Sheet(s) => s.time(),
-            ClothModel::Flex3d(w) => w.time(),
-            ClothModel::Oliveira(c) => c.cloth().time(),
-        }
+        self.model.time()
     }
 
     /// Steps taken so far.
     pub fn steps(&self) -> u64 {
-        match &self.model {
-            ClothModel::Sheet(s) => s.steps(),
-            ClothModel::Flex3d(w) => w.steps(),
-            ClothModel::Oliveira(c) => c.cloth().steps(),
-        }
+        self.model.steps()
     }
 
     /// The step the next call to [`ClothSim::step`] takes, s.
     pub fn dt(&self) -> f64 {
-        match &self.model {
-            ClothModel::Sheet(s) => s.dt(),
-            ClothModel::Flex3d(w) => w.dt(),
-            ClothModel::Oliveira(c) => c.cloth().dt(),
-        }
+        self.model.dt()
     }
 
     pub fn positions(&self) -> &[DVec3] {
-        match &self.model {
-            ClothModel::Sheet(s) => &s.state().x,
-            ClothModel::Flex3d(w) => w.positions(),
-            ClothModel::Oliveira(c) => c.cloth().positions(),
-        }
+        self.model.positions()
     }
 
     pub fn velocities(&self) -> &[DVec3] {
-        match &self.model {
-            ClothModel::Sheet(s) => &s.state().v,
-            ClothModel::Flex3d(w) => w.velocities(),
-            ClothModel::Oliveira(c) => c.cloth().velocities(),
-        }
+        self.model.velocities()
     }
 
     /// Replaces every particle's position and velocity. Multistep and implicit integrators start their
@@ -169,24 +123,13 @@ impl ClothSim {
         if let Some(i) = x.iter().zip(v).position(|(x, v)| !(x.is_finite() && v.is_finite())) {
             bail!("particle {i}'s position or velocity is not finite");
         }
-        match &mut self.model {
-            ClothModel::Sheet(s) => {
-                s.state_mut().x.copy_from_slice(x);
-                s.state_mut().v.copy_from_slice(v);
-                s.stepper_mut().reset_history();
-            }
-            ClothModel::Flex3d(w) => w.set_state(x, v),
-            ClothModel::Oliveira(c) => c.set_state(x, v),
-        }
+        self.model.set_state(x, v);
         Ok(())
     }
 
     /// The cloth's triangles (particle indices). An Oliveira drape's change when it is remeshed.
     pub fn triangles(&self) -> &[[u32; 3]] {
-        match &self.model {
-            ClothModel::Oliveira(c) => c.cloth().triangles(),
-            _ => &self.triangles,
-        }
+        self.model.triangles().unwrap_or(&self.triangles)
     }
 
     /// The static objects the cloth meets, as triangle meshes (spheres and cylinders tessellated,
@@ -254,7 +197,7 @@ impl FigureSim {
     pub fn run(&mut self, n: usize) -> Result<()> {
         for _ in 0..n {
             match &mut self.figures {
-                FigureModel::Posed(p) => p.step()?,
+                FigureModel::Posed(p) => Figures::step(p.as_mut())?,
                 FigureModel::Character(c) => Figures::step(c.as_mut())?,
             }
         }

@@ -21,6 +21,7 @@ use super::{
     CrossingWatch, Detail, OutputClock, Progress, RunOptions, Summary, sheet_frames, stability_warning,
 };
 use crate::output::write_atomic;
+use crate::simulation::Deformable;
 
 /// The numbers of a sheet run.
 #[derive(Debug, Clone, Serialize)]
@@ -70,7 +71,7 @@ pub fn run(
         Cloth::Springs(s) => s.threads(),
         Cloth::Membrane(_) => 1,
     };
-    opts.solve.configure(sim.stepper_mut());
+    opts.solve.configure(sim.model_mut().stepper_mut());
     let mut warnings = Vec::new();
     let pinned: Vec<bool> = {
         let mut p = vec![false; n];
@@ -80,7 +81,7 @@ pub fn run(
         p
     };
     let v = vec![DVec3::ZERO; n];
-    let x0 = sim.state().x.clone();
+    let x0 = sim.model().positions().to_vec();
     // 200 iterations: 60 underestimated ω_max of the 256 × 256 sheet, whose spectrum is dense at the top.
     let (omega, zeta) =
         anima_ode::stability::max_frequency_and_damping(sim.system(), 0.0, &x0, &v, &pinned, 200);
@@ -113,7 +114,7 @@ pub fn run(
         Some(_) => {
             let up = UpAxis::against(scene.sheet.gravity, UpAxis::PlusZ);
             let mut e = GltfExport::cloth(up, &[], &[("sheet", n, &triangles)], n_frames)?;
-            e.deforming_frame(0, sim.time(), |_| &sim.state().x[..]);
+            e.deforming_frame(0, sim.model().time(), |_| sim.model().positions());
             Some(e)
         }
         None => None,
@@ -128,7 +129,7 @@ pub fn run(
     if scene.integrator.is_adaptive() {
         // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
         let mut stepper = Stepper::new(scene.integrator, n);
-        let mut state = sim.state().clone();
+        let mut state = State::new(sim.model().positions().to_vec(), sim.model().velocities().to_vec());
         let mut scratch = State::zeros(n);
         let control =
             StepControl::Adaptive { tolerance: 1e-6, dt_initial: scene.dt_s, dt_min: 1e-8, dt_max: 0.01 };
@@ -149,13 +150,13 @@ pub fn run(
             }
             Err(e) => error = Some(e.to_string()),
         }
-        *sim.state_mut() = state;
+        sim.model_mut().set_state(&state.x, &state.v);
         frames = n_frames;
         // The embedded controller gives no frames on the way: the export holds the start and the end.
         if let Some(e) = &mut export
             && error.is_none()
         {
-            e.deforming_frame(n_frames, scene.duration_s, |_| &sim.state().x[..]);
+            e.deforming_frame(n_frames, scene.duration_s, |_| sim.model().positions());
         }
     } else {
         for k in 1..=n_frames {
@@ -164,25 +165,26 @@ pub fn run(
             } else {
                 ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
             };
-            if let Err(e) = sim.run(target.saturating_sub(sim.steps() as usize)) {
+            let left = (target as u64).saturating_sub(sim.model().steps());
+            if let Err(e) = sim.model_mut().run(left) {
                 diverged = e.is_non_finite();
                 error = Some(e.to_string());
                 break;
             }
             frames = k;
-            watch.look(&sim.state().x, &triangles);
-            progress.advance(sim.steps());
+            watch.look(sim.model().positions(), &triangles);
+            progress.advance(sim.model().steps());
             output.time(|| -> Result<()> {
                 if let Some(e) = &mut export {
-                    e.deforming_frame(k, sim.time(), |_| &sim.state().x[..]);
+                    e.deforming_frame(k, sim.model().time(), |_| sim.model().positions());
                 }
                 if let Some(dir) = opts.frame_dir() {
                     write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
-                        Ok(write_obj(w, "sheet", &sim.state().x, &triangles)?)
+                        Ok(write_obj(w, "sheet", sim.model().positions(), &triangles)?)
                     })?;
                 }
                 if opts.picture_dir().is_some() && shown.contains(&k) {
-                    snapshots.push((k, sim.time(), sim.state().x.clone()));
+                    snapshots.push((k, sim.model().time(), sim.model().positions().to_vec()));
                 }
                 Ok(())
             })?;
@@ -191,9 +193,9 @@ pub fn run(
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     let output_seconds = output.seconds();
     progress.end();
-    let x = &sim.state().x;
+    let x = sim.model().positions();
     watch.look(x, &triangles);
-    let steps = sim.steps();
+    let steps = sim.model().steps();
     if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
         for w in e.write(dir)? {
             progress.warn(&w);
@@ -209,10 +211,10 @@ pub fn run(
         kind: "sheet",
         steps,
         frames,
-        simulated_seconds: sim.time(),
+        simulated_seconds: sim.model().time(),
         wall_seconds,
         output_seconds,
-        all_finite: !diverged && sim.state().first_non_finite().is_none(),
+        all_finite: !diverged && x.iter().chain(sim.model().velocities()).all(|p| p.is_finite()),
         error,
         warnings,
         self_intersections: Some(watch.largest),
@@ -233,7 +235,7 @@ pub fn run(
                 (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()
             }),
             max_strain: sim.max_strain(x),
-            max_speed: sim.state().v.iter().map(|v| v.length()).fold(0.0, f64::max),
+            max_speed: sim.model().velocities().iter().map(|v| v.length()).fold(0.0, f64::max),
             kinetic_energy: match &sim {
                 // Equal particles: ½ (M/n) Σ v².
                 Cloth::Springs(s) => {
@@ -250,7 +252,7 @@ pub fn run(
         write_atomic(&dir.join("final.obj"), |w| Ok(write_obj(w, "sheet", x, &triangles)?))?;
     }
     if let Some(dir) = opts.picture_dir() {
-        write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
+        write_pictures(dir, x, sim.model().time(), &snapshots, &triangles)?;
     }
     Ok(summary)
 }
@@ -294,24 +296,25 @@ impl Cloth {
         })
     }
 
-    pub(crate) fn run(&mut self, steps: usize) -> Result<(), StepError> {
+    /// The model, through the contract every cloth model keeps.
+    pub(crate) fn model(&self) -> &dyn Deformable<Error = StepError> {
         match self {
-            Cloth::Springs(s) => s.run(steps),
-            Cloth::Membrane(m) => m.run(steps),
+            Cloth::Springs(s) => s.as_ref(),
+            Cloth::Membrane(m) => m.as_ref(),
         }
     }
 
-    pub(crate) fn state(&self) -> &State<DVec3> {
+    pub(crate) fn model_mut(&mut self) -> &mut dyn Deformable<Error = StepError> {
         match self {
-            Cloth::Springs(s) => &s.state,
-            Cloth::Membrane(m) => &m.state,
+            Cloth::Springs(s) => s.as_mut(),
+            Cloth::Membrane(m) => m.as_mut(),
         }
     }
 
-    pub(crate) fn state_mut(&mut self) -> &mut State<DVec3> {
+    pub(crate) fn into_model(self) -> crate::sim::ClothModel {
         match self {
-            Cloth::Springs(s) => &mut s.state,
-            Cloth::Membrane(m) => &mut m.state,
+            Cloth::Springs(s) => s,
+            Cloth::Membrane(m) => m,
         }
     }
 
@@ -319,34 +322,6 @@ impl Cloth {
         match self {
             Cloth::Springs(s) => &mut s.network,
             Cloth::Membrane(m) => &mut m.membrane,
-        }
-    }
-
-    pub(crate) fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
-        match self {
-            Cloth::Springs(s) => s.stepper_mut(),
-            Cloth::Membrane(m) => m.stepper_mut(),
-        }
-    }
-
-    pub(crate) fn time(&self) -> f64 {
-        match self {
-            Cloth::Springs(s) => s.time(),
-            Cloth::Membrane(m) => m.time(),
-        }
-    }
-
-    pub(crate) fn dt(&self) -> f64 {
-        match self {
-            Cloth::Springs(s) => s.dt(),
-            Cloth::Membrane(m) => m.dt(),
-        }
-    }
-
-    pub(crate) fn steps(&self) -> u64 {
-        match self {
-            Cloth::Springs(s) => s.steps(),
-            Cloth::Membrane(m) => m.steps(),
         }
     }
 
