@@ -188,8 +188,8 @@ impl Cloth {
         duration: Option<f64>,
     ) -> PyResult<Self> {
         let text = match test {
-            "table" => include_str!("../../assets/oliveira/test-2-table-17x17.ron"),
-            "sphere" => include_str!("../../assets/oliveira/test-3-sphere-17x17.ron"),
+            "table" => include_str!("../scenes/test-2-table-17x17.ron"),
+            "sphere" => include_str!("../scenes/test-3-sphere-17x17.ron"),
             other => {
                 return Err(value_error(format!("expected the drape `table` or `sphere`, found `{other}`")));
             }

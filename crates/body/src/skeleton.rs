@@ -315,11 +315,11 @@ impl BuiltinSkeleton {
     /// The RON text of this skeleton, as shipped in `assets/skeletons/`.
     pub fn ron(self) -> &'static str {
         match self {
-            BuiltinSkeleton::Humanoid => include_str!("../../../assets/skeletons/humanoid.ron"),
-            BuiltinSkeleton::Thrower => include_str!("../../../assets/skeletons/thrower.ron"),
-            BuiltinSkeleton::Pusher => include_str!("../../../assets/skeletons/pusher.ron"),
+            BuiltinSkeleton::Humanoid => include_str!("../skeletons/humanoid.ron"),
+            BuiltinSkeleton::Thrower => include_str!("../skeletons/thrower.ron"),
+            BuiltinSkeleton::Pusher => include_str!("../skeletons/pusher.ron"),
             BuiltinSkeleton::HumanoidSimbicon => {
-                include_str!("../../../assets/skeletons/humanoid-simbicon.ron")
+                include_str!("../skeletons/humanoid-simbicon.ron")
             }
         }
     }

@@ -314,8 +314,8 @@ fn parse_gravity(s: &str) -> Result<DVec3, String> {
 }
 
 /// The built-in default scene: the FLEX3D tablecloth (spec E-8) with its reconstructed table.
-const DEFAULT_SCENE: &str = include_str!("../../../assets/flex3d/tablecloth.ron");
-const DEFAULT_TABLE: &str = include_str!("../../../assets/flex3d/mesa.obt");
+const DEFAULT_SCENE: &str = include_str!("../scenes/tablecloth.ron");
+const DEFAULT_TABLE: &str = include_str!("../scenes/mesa.obt");
 
 fn load_default() -> Result<Scene> {
     let scene = anima_scene::flex3d::from_ron_str(DEFAULT_SCENE).context("the built-in scene")?;
