@@ -49,7 +49,9 @@ pub struct ModelEntry {
 #[serde(rename = "BodyScene", deny_unknown_fields)]
 pub struct BodyScene {
     pub name: String,
-    /// Simulated time, seconds.
+    /// Simulated time, seconds. Written `duration_s` as in every scene schema; the older `duration`
+    /// still reads.
+    #[serde(rename = "duration_s", alias = "duration")]
     pub duration: f64,
     /// Seconds between rendered frames.
     pub frame_interval: f64,
@@ -77,7 +79,7 @@ impl BodyScene {
         }
         if !(self.duration > 0.0 && self.duration.is_finite()) {
             return bad(
-                "duration",
+                "duration_s",
                 format!("expected a positive number of seconds, found {}", self.duration),
             );
         }
@@ -89,7 +91,7 @@ impl BodyScene {
         }
         if !(self.world.dt > 0.0 && self.world.dt.is_finite()) {
             return bad(
-                "world.dt",
+                "world.dt_s",
                 format!("expected a positive number of seconds, found {}", self.world.dt),
             );
         }

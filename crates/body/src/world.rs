@@ -127,7 +127,8 @@ impl SolverSettings {
 #[serde(deny_unknown_fields)]
 pub struct WorldSettings {
     /// Control step Δt, seconds: commands and sensors are exchanged once per step (0.05 s in the
-    /// thesis, §5.2).
+    /// thesis, §5.2). Written `dt_s` as in every scene schema; the older `dt` still reads.
+    #[serde(rename = "dt_s", alias = "dt")]
     pub dt: f64,
     /// Physics sub-steps per control step: targets are held, but every PD torque is re-evaluated
     /// from the state at each sub-step of Δt/substeps (spec §4.3).

@@ -39,7 +39,9 @@ pub enum Evaluation {
 #[serde(rename = "CharacterScene", deny_unknown_fields)]
 pub struct CharacterScene {
     pub name: String,
-    /// Simulated time, s.
+    /// Simulated time, s. Written `duration_s` as in every scene schema; the older `duration` still
+    /// reads.
+    #[serde(rename = "duration_s", alias = "duration")]
     pub duration: f64,
     /// Seconds between rendered frames.
     pub frame_interval: f64,

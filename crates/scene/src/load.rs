@@ -199,7 +199,7 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
         Some("BodyScene") => {
             let scene = BodyScene::from_ron_str(text).map_err(|e| file.description(e))?;
             if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval) {
-                return Err(file.invalid_at(text, "duration", why));
+                return Err(file.invalid_at(text, "duration_s", why));
             }
             let skeletons =
                 scene.models.iter().map(|m| file.skeleton(&m.skeleton)).collect::<Result<Vec<_>, _>>()?;
@@ -421,12 +421,12 @@ impl File<'_> {
     fn character(&self, text: &str) -> Result<LoadedCharacter, SceneError> {
         let scene: CharacterScene =
             anima_format::ron_text::from_str(text).map_err(|e| self.parse_error(e))?;
-        check_positive(self, text, "duration", scene.duration)?;
+        check_positive(self, text, "duration_s", scene.duration)?;
         check_positive(self, text, "frame_interval", scene.frame_interval)?;
-        check_positive(self, text, "world.dt", scene.world.dt)?;
+        check_positive(self, text, "world.dt_s", scene.world.dt)?;
         scene.world.check().map_err(|e| self.invalid_at(text, "world", e.to_string()))?;
         if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval) {
-            return Err(self.invalid_at(text, "duration", why));
+            return Err(self.invalid_at(text, "duration_s", why));
         }
         if scene.models.is_empty() {
             return Err(self.invalid_at(text, "models", "expected at least one model".into()));

@@ -512,7 +512,7 @@ fn ron_enum_variant_in_the_wrong_case_is_refused() {
 mod kinds {
     use std::path::{Path, PathBuf};
 
-    use anima_scene::{LoadOptions, SceneError, SceneKind, load};
+    use anima_scene::{LoadOptions, Scene, SceneError, SceneKind, load};
 
     fn write(name: &str, text: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("anima-scene-kinds-{}", std::process::id()));
@@ -589,8 +589,16 @@ mod kinds {
         let e = at("wrong", &walk.replace("walk-optimised.ron", "backflip.ron"));
         assert!(e.contains("names no actuator of the scene's models") && e.contains("line"), "{e}");
         // A bad value, located.
-        let e = at("dt", &walk.replace("dt: 0.05,", "dt: -0.05,"));
-        assert!(e.contains("world.dt") && e.contains("line 11, column 9"), "{e}");
+        let e = at("dt", &walk.replace("dt_s: 0.05,", "dt_s: -0.05,"));
+        assert!(e.contains("world.dt_s") && e.contains("line 11, column 9"), "{e}");
+        // The older spellings of the run header (`duration`, the world's `dt`) still read.
+        let old = walk.replace("duration_s:", "duration:").replace("dt_s:", "dt:");
+        assert!(old.contains("duration:") && old.contains("dt:") && !old.contains("dt_s"));
+        let p = write("old-spelling.ron", &old);
+        let Ok(Scene::Character(l)) = load(&p, &LoadOptions::default()) else {
+            panic!("the old spelling reads")
+        };
+        assert_eq!((l.scene.duration, l.scene.world.dt), (50.0, 0.05));
     }
 }
 
