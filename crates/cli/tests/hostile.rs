@@ -125,7 +125,7 @@ fn declared_sizes_and_counts_are_bounded_before_anything_is_allocated() {
     refused(&run(&dir, &sheet, &["--dt", "1e-300"]), &["at most 1e9 steps"]);
     let p = edited(&dir, "scenes/standard-sheet-32.ron", "n: 32,", "n: 100000,", "huge.ron");
     refused(&run(&dir, &p, &[]), &["huge.ron", "sheet.n", "expected 2 to 2000 particles a side"]);
-    let p = edited(&dir, "scenes/walk.ron", "duration: 50.0,", "duration: inf,", "forever.ron");
+    let p = edited(&dir, "scenes/walk.ron", "duration_s: 50.0,", "duration_s: inf,", "forever.ron");
     refused(&run(&dir, &p, &[]), &["forever.ron", "duration"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
