@@ -296,6 +296,38 @@ fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
+/// Adaptive Euler on a FLEX3D scene would run as forward Euler at the scene's fixed step: it is
+/// refused, from the command line and from a scene file (at its line), before anything runs.
+#[test]
+fn adaptive_euler_on_a_fixed_step_scene_is_refused() {
+    let curtain = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/flex3d/curtain.ron");
+    let out = temp_dir("adaptive");
+    let o = anima()
+        .args(["run", "--quiet", "--integrator", "adaptive-euler", "--out"])
+        .arg(&out)
+        .arg(&curtain)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--integrator adaptive-euler") && err.contains("chooses its own steps"), "{err}");
+    let text = std::fs::read_to_string(&curtain)
+        .unwrap()
+        .replace("integrator: ForwardEuler", "integrator: AdaptiveEuler");
+    assert!(text.contains("AdaptiveEuler"));
+    let file = out.join("curtain-adaptive.ron");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(&file, text).unwrap();
+    let o = anima().args(["run", "--quiet", "--out"]).arg(out.join("run")).arg(&file).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("integrator") && err.contains("line 55") && err.contains("chooses its own steps"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
 #[test]
 fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
     let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/optimisations/walk.ron");

@@ -54,3 +54,17 @@ mod sheet_stencil;
 pub mod spring_net;
 
 pub use error::StepError;
+
+/// Whether a model that steps at its scene's Δt can take `integrator`: the adaptive methods (the
+/// thesis's adaptive Euler, Dormand–Prince) choose their own steps, which only the sheets' run loop
+/// gives them. A FLEX3D world or an Oliveira cloth would take them at the fixed step (adaptive Euler as
+/// forward Euler), silently; both refuse them with this reason.
+pub fn check_fixed_step_integrator(integrator: anima_ode::Integrator) -> Result<(), String> {
+    if integrator.is_adaptive() {
+        return Err(format!(
+            "expected an integrator for a fixed step, found {integrator}, which chooses its own steps: \
+             FLEX3D and Oliveira scenes step at their Δt (sheet scenes run it adaptively)"
+        ));
+    }
+    Ok(())
+}

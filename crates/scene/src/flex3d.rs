@@ -59,6 +59,9 @@ pub fn convert_par_to_ron(src_bytes: &[u8], file_name: &str, gravity: DVec3) -> 
 /// script is checked the same way by its parser, at the token.
 pub fn check(scene: &Flex3dScene) -> Result<(), FieldError> {
     let bad = |field: String, why: String| Err(FieldError::invalid(field, why));
+    if let Err(why) = anima_cloth::check_fixed_step_integrator(scene.integrator) {
+        return bad("integrator".into(), why);
+    }
     let positive = |field: &str, v: f64| {
         if v > 0.0 && v.is_finite() {
             Ok(())

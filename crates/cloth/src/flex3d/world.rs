@@ -420,6 +420,7 @@ impl Flex3dWorld {
         if !(scene.frame_rate_hz > 0.0 && scene.frame_rate_hz.is_finite()) {
             return Err(bad("the frame rate must be positive"));
         }
+        crate::check_fixed_step_integrator(scene.integrator).map_err(BuildError::Scene)?;
         if !(scene.gravity_m_s2.is_finite() && scene.external_force_n.is_finite()) {
             return Err(bad("gravity and external force must be finite"));
         }

@@ -219,6 +219,7 @@ impl OliveiraCloth {
     /// scene's `Mesh` objects, in the order the scene lists them.
     pub fn new(scene: &OliveiraScene, meshes: Vec<TriangleMesh>) -> Result<Self, BuildError> {
         finite_positive("duration_s", scene.duration_s)?;
+        crate::check_fixed_step_integrator(scene.integrator).map_err(|why| field("integrator", why))?;
         if !scene.gravity_m_s2.is_finite() {
             return Err(field("gravity_m_s2", "must be finite"));
         }

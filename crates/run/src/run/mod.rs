@@ -387,6 +387,12 @@ impl Overrides {
         if self.flex3d.any() && !matches!(scene, Scene::Flex3d(_)) {
             return Err(not_for("a FLEX3D switch (--friction, --contact, --static-response, …)"));
         }
+        if let Some(i) = self.integrator
+            && matches!(scene, Scene::Flex3d(_) | Scene::Oliveira(_))
+        {
+            anima_cloth::check_fixed_step_integrator(i)
+                .map_err(|why| anyhow::anyhow!("--integrator {i}: {why}"))?;
+        }
         match scene {
             Scene::Flex3d(l) => {
                 let s = &mut l.scene;
