@@ -44,3 +44,35 @@ fn the_committed_faithful_simbicon_section_is_what_its_command_writes() {
          the diff"
     );
 }
+
+/// The README quotes the benchmark reports; each number it quotes is the one the report's table holds
+/// (the reports are written by `cargo xtask bench` and `bench --peers`: when they are regenerated, this
+/// fails until the README says what they say).
+#[test]
+fn the_readme_quotes_the_benchmark_reports_as_they_stand() {
+    let read = |rel: &str| std::fs::read_to_string(Repo::here().root().join(rel)).unwrap();
+    let (readme, peers, bench) =
+        (read("README.md"), read("docs/benchmarks-peers.md"), read("docs/benchmarks.md"));
+    // The first table row starting with `row` after the heading `heading`, split into its cells.
+    let cells = |doc: &str, heading: &str, row: &str| -> Vec<String> {
+        let from = doc.find(heading).unwrap_or_else(|| panic!("no section `{heading}`"));
+        let line =
+            doc[from..].lines().find(|l| l.starts_with(row)).unwrap_or_else(|| panic!("no row `{row}`"));
+        line.split('|').map(|c| c.trim().to_owned()).filter(|c| !c.is_empty()).collect()
+    };
+    // A cell's leading number with its unit ("0.544 s (0.543–0.555)" gives "0.544 s").
+    let lead = |cell: &str| cell.split(" (").next().unwrap().to_owned();
+    let one = cells(&peers, "## Standard sheet, N = 64, 10⁻⁴ s, 1 s: anima on one thread", "| anima |");
+    let every = cells(&peers, "## Standard sheet, N = 64, 10⁻⁴ s, 1 s: anima on every core", "| anima |");
+    let alpha =
+        cells(&bench, "### N = 64: anima at the common step", "| generalized-alpha | 1.67e-2 (large) |");
+    let quoted = [
+        format!("{} on one core, {} on two", lead(&one[1]), lead(&every[1])),
+        format!("1/60 s in {}, {} from the converged centre of mass", lead(&alpha[2]), alpha[3]),
+    ];
+    // The README wraps its lines: compare with its whitespace made single spaces.
+    let flat = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    for q in quoted {
+        assert!(flat.contains(&q), "the README should say `{q}`, as the reports do");
+    }
+}
