@@ -357,12 +357,7 @@ fn run_figures<F: Figures>(
     progress.end();
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
     let mut warnings = Vec::new();
-    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
-        for w in e.write(dir)? {
-            progress.warn(&w);
-            warnings.push(w);
-        }
-    }
+    super::closing_warnings(export, opts, None, progress, &mut warnings)?;
     if let Some(dir) = out
         && let Some(last) = frames.last()
     {

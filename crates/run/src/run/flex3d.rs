@@ -181,16 +181,7 @@ pub fn run(
     let d = world.diagnostics();
     let counts = world.collision_counts();
     let steps = world.steps() as usize;
-    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
-        for w in e.write(dir)? {
-            progress.warn(&w);
-            warnings.push(w);
-        }
-    }
-    if let Some(w) = watch.warning() {
-        progress.warn(&w);
-        warnings.push(w);
-    }
+    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "flex3d",

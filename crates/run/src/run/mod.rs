@@ -177,6 +177,26 @@ pub struct Summary {
     pub detail: Detail,
 }
 
+/// The warnings a run gives at its end: the glTF export's, written now, and the crossing watch's (when
+/// it watched), each shown on `progress` and kept for the summary.
+pub(crate) fn closing_warnings(
+    export: Option<export::GltfExport>,
+    opts: &RunOptions,
+    watch: Option<&CrossingWatch>,
+    progress: &mut dyn Progress,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    let written = match (export, opts.gltf_dir()) {
+        (Some(e), Some(dir)) => e.write(dir)?,
+        _ => Vec::new(),
+    };
+    for w in written.into_iter().chain(watch.and_then(CrossingWatch::warning)) {
+        progress.warn(&w);
+        warnings.push(w);
+    }
+    Ok(())
+}
+
 /// Counts a cloth's self-intersections at each frame: the largest count, and the time spent counting
 /// (so that a run's wall time stays the time of the run).
 #[derive(Debug, Default)]
@@ -393,37 +413,25 @@ impl Overrides {
             anima_cloth::check_fixed_step_integrator(i)
                 .map_err(|why| anyhow::anyhow!("--integrator {i}: {why}"))?;
         }
+        // Each switch given replaces the scene's value.
+        fn set<T>(field: &mut T, value: Option<T>) {
+            if let Some(v) = value {
+                *field = v;
+            }
+        }
         match scene {
             Scene::Flex3d(l) => {
                 let s = &mut l.scene;
-                if let Some(i) = self.integrator {
-                    s.integrator = i;
-                }
-                if let Some(dt) = dt {
-                    s.dt_s = dt;
-                }
-                if let Some(d) = duration {
-                    s.duration_s = d;
-                }
-                if let Some(g) = self.gravity {
-                    s.gravity_m_s2 = g;
-                }
-                if let Some(c) = self.contact_mode {
-                    s.options.object_contact = c;
-                }
-                if let Some(m) = self.self_collision {
-                    s.options.self_collision = m;
-                }
+                set(&mut s.integrator, self.integrator);
+                set(&mut s.dt_s, dt);
+                set(&mut s.duration_s, duration);
+                set(&mut s.gravity_m_s2, self.gravity);
+                set(&mut s.options.object_contact, self.contact_mode);
+                set(&mut s.options.self_collision, self.self_collision);
                 let f = &self.flex3d;
-                if let Some(m) = f.friction {
-                    s.friction.mode = m;
-                }
-                if let Some(c) = f.contact {
-                    s.options.contact = c;
-                }
-                if let Some(r) = f.static_response {
-                    s.options.static_response = r;
-                }
+                set(&mut s.friction.mode, f.friction);
+                set(&mut s.options.contact, f.contact);
+                set(&mut s.options.static_response, f.static_response);
                 s.options.external_force_is_acceleration |= f.external_is_acceleration;
                 s.options.bend_reaction |= f.bend_reaction;
                 s.options.friction_clamp |= f.friction_clamp;
@@ -443,36 +451,18 @@ impl Overrides {
                         "--gravity (the standard sheet's gravity is part of its definition)",
                     ));
                 }
-                if let Some(i) = self.integrator {
-                    s.integrator = i;
-                }
-                if let Some(dt) = dt {
-                    s.dt_s = dt;
-                }
-                if let Some(d) = duration {
-                    s.duration_s = d;
-                }
+                set(&mut s.integrator, self.integrator);
+                set(&mut s.dt_s, dt);
+                set(&mut s.duration_s, duration);
             }
             Scene::Oliveira(l) => {
                 let s = &mut l.scene;
-                if let Some(i) = self.integrator {
-                    s.integrator = i;
-                }
-                if let Some(dt) = dt {
-                    s.time_step = StepRule::Fixed { dt_s: dt };
-                }
-                if let Some(d) = duration {
-                    s.duration_s = d;
-                }
-                if let Some(g) = self.gravity {
-                    s.gravity_m_s2 = g;
-                }
-                if let Some(c) = self.contact_mode {
-                    s.options.contact = c;
-                }
-                if let Some(m) = self.self_collision {
-                    s.options.self_collision = m;
-                }
+                set(&mut s.integrator, self.integrator);
+                set(&mut s.time_step, dt.map(|dt_s| StepRule::Fixed { dt_s }));
+                set(&mut s.duration_s, duration);
+                set(&mut s.gravity_m_s2, self.gravity);
+                set(&mut s.options.contact, self.contact_mode);
+                set(&mut s.options.self_collision, self.self_collision);
             }
             Scene::Body(_) | Scene::Character(_) => {
                 if self.integrator.is_some()
@@ -489,12 +479,8 @@ impl Overrides {
                     Scene::Character(l) => (&mut l.scene.world, &mut l.scene.duration),
                     _ => unreachable!("matched above"),
                 };
-                if let Some(dt) = dt {
-                    world.dt = dt;
-                }
-                if let Some(d) = duration {
-                    *scene_duration = d;
-                }
+                set(&mut world.dt, dt);
+                set(scene_duration, duration);
             }
         }
         self.check_after(scene)

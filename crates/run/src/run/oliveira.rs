@@ -128,19 +128,10 @@ pub fn run(
         return Err(e);
     }
     let mut warnings = Vec::new();
-    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
-        for w in e.write(dir)? {
-            progress.warn(&w);
-            warnings.push(w);
-        }
-    }
     let c = cloth.cloth();
     watch.look(c.positions(), c.triangles());
     let stats = cloth.stats();
-    if let Some(w) = watch.warning() {
-        progress.warn(&w);
-        warnings.push(w);
-    }
+    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "oliveira",

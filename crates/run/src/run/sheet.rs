@@ -196,16 +196,7 @@ pub fn run(
     let x = sim.model().positions();
     watch.look(x, &triangles);
     let steps = sim.model().steps();
-    if let (Some(e), Some(dir)) = (export, opts.gltf_dir()) {
-        for w in e.write(dir)? {
-            progress.warn(&w);
-            warnings.push(w);
-        }
-    }
-    if let Some(w) = watch.warning() {
-        progress.warn(&w);
-        warnings.push(w);
-    }
+    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "sheet",
