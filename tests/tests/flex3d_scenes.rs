@@ -56,6 +56,12 @@ fn every_integrator_keeps_the_curtain_finite_at_the_thesis_step() {
     for integrator in anima_ode::Integrator::ALL {
         let mut loaded = ThesisScene::Curtain.load().unwrap();
         loaded.scene.integrator = integrator;
+        if integrator.is_adaptive() {
+            // They choose their own steps, which a FLEX3D world does not give them: refused.
+            let e = Flex3dWorld::new(&loaded.scene, loaded.meshes()).unwrap_err();
+            assert!(e.to_string().contains("chooses its own steps"), "{integrator}: {e}");
+            continue;
+        }
         let p = positions_after(&loaded, 5000);
         assert!(p.iter().all(|x| x.is_finite()), "{integrator}");
     }
