@@ -28,15 +28,6 @@ impl StepError {
     pub fn is_non_finite(&self) -> bool {
         matches!(self, StepError::NonFinite(_) | StepError::Solver { source: OdeError::NonFiniteSystem, .. })
     }
-
-    /// The step that failed.
-    pub fn step(&self) -> u64 {
-        match self {
-            StepError::NonFinite(e) => e.step,
-            StepError::Diverged(e) => e.step,
-            StepError::Solver { step, .. } => *step,
-        }
-    }
 }
 
 /// A value went non-finite: the first particle (in the model's order) with a non-finite position or

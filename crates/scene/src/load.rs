@@ -353,9 +353,6 @@ impl File<'_> {
             let why = format!("expected a positive number of seconds, found {}", scene.duration_s);
             return Err(self.invalid_at(text, &format!("{prefix}duration_s"), why));
         }
-        if let Err(why) = anima_cloth::check_fixed_step_integrator(scene.integrator) {
-            return Err(self.invalid_at(text, &format!("{prefix}integrator"), why));
-        }
         if let Err(why) = crate::oliveira::check_contact(scene) {
             return Err(self.invalid_at(text, &format!("{prefix}options.contact"), why));
         }

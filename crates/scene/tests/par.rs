@@ -611,6 +611,9 @@ fn ron_scenes_with_times_a_run_cannot_use_are_refused_at_their_line() {
         ("scenes/standard-sheet-32.ron", "dt_s: 0.0002", "dt_s: -0.0002", "dt_s"),
         ("scenes/standard-sheet-32.ron", "frame_rate_hz: 30.0", "frame_rate_hz: 0.0", "frame_rate_hz"),
         ("flex3d/curtain.ron", "duration_s: 25.0", "duration_s: inf", "duration_s"),
+        // An adaptive integrator where the model steps at a fixed Δt.
+        ("flex3d/curtain.ron", "integrator: ForwardEuler", "integrator: AdaptiveEuler", "integrator"),
+        ("oliveira/test-2-table-17x17.ron", "integrator: Rk4", "integrator: AdaptiveEuler", "integrator"),
     ] {
         let text = fs::read_to_string(root.join(rel)).unwrap();
         assert!(text.contains(from), "{rel}");

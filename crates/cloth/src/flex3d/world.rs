@@ -994,8 +994,7 @@ impl Flex3dWorld {
     }
 
     fn check_finite(&self) -> Result<(), NonFinite> {
-        let bad = self.now.x.iter().zip(&self.now.v).position(|(x, v)| !(x.is_finite() && v.is_finite()));
-        let Some(p) = bad else { return Ok(()) };
+        let Some(p) = self.now.first_non_finite() else { return Ok(()) };
         let s = self.surfaces.iter().find(|s| s.range().contains(&p)).expect("every particle has a surface");
         let local = p - s.offset;
         Err(NonFinite {

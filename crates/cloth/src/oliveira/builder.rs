@@ -98,31 +98,23 @@ impl ClothBuilder {
         length_m: f64,
         base_centre: DVec3,
     ) -> Self {
-        let shape = ShapeDesc::Mesh { file: name.to_owned(), up, length_m, base_centre_m: base_centre };
-        self.scene.objects.push(ObjectDesc {
-            name: name.to_owned(),
-            friction: self.scene.material.friction,
-            shape,
-        });
         self.meshes.push(mesh);
-        self
+        self.object(name, ShapeDesc::Mesh { file: name.to_owned(), up, length_m, base_centre_m: base_centre })
     }
 
-    pub fn sphere(mut self, name: &str, centre: DVec3, radius_m: f64) -> Self {
-        let shape = ShapeDesc::Sphere { centre_m: centre, radius_m };
-        self.scene.objects.push(ObjectDesc {
-            name: name.to_owned(),
-            friction: self.scene.material.friction,
-            shape,
-        });
-        self
+    pub fn sphere(self, name: &str, centre: DVec3, radius_m: f64) -> Self {
+        self.object(name, ShapeDesc::Sphere { centre_m: centre, radius_m })
     }
 
     /// A floor: everything below z = `z_m`.
-    pub fn floor(mut self, z_m: f64) -> Self {
-        let shape = ShapeDesc::HalfSpace { point_m: DVec3::new(0.0, 0.0, z_m), normal: DVec3::Z };
+    pub fn floor(self, z_m: f64) -> Self {
+        self.object("floor", ShapeDesc::HalfSpace { point_m: DVec3::new(0.0, 0.0, z_m), normal: DVec3::Z })
+    }
+
+    /// An object with the cloth's friction (a contact takes the mean of the two, Eq. 4.17).
+    fn object(mut self, name: &str, shape: ShapeDesc) -> Self {
         let friction = self.scene.material.friction;
-        self.scene.objects.push(ObjectDesc { name: "floor".to_owned(), friction, shape });
+        self.scene.objects.push(ObjectDesc { name: name.to_owned(), friction, shape });
         self
     }
 
@@ -141,5 +133,36 @@ impl ClothBuilder {
     /// The cloth, checked as a scene file is: a value out of range is a [`BuildError`] naming its field.
     pub fn build(self) -> Result<OliveiraCloth, BuildError> {
         OliveiraCloth::new(&self.scene, self.meshes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_builder_checks_what_a_scene_file_is_checked_for() {
+        let field_of = |b: ClothBuilder| match b.build() {
+            Err(BuildError::Field { field, .. }) => field,
+            other => panic!("expected a field error, found {other:?}"),
+        };
+        // Over a floor alone there is no highest point to centre on: the centre must be given.
+        assert_eq!(field_of(OliveiraCloth::builder(4, 1.0).floor(0.0).height(0.5)), "cloth.centre");
+        let cloth = OliveiraCloth::builder(4, 1.0)
+            .floor(0.0)
+            .centre(0.0, 0.0)
+            .height(0.5)
+            .build()
+            .expect("a 4 × 4 cloth");
+        assert_eq!(cloth.positions().len(), 16);
+        assert!(cloth.positions().iter().all(|p| (p.z - 0.5).abs() < 1e-12));
+        assert_eq!(
+            field_of(OliveiraCloth::builder(1, 1.0).floor(0.0).centre(0.0, 0.0)),
+            "cloth.vertices_per_side"
+        );
+        assert_eq!(field_of(OliveiraCloth::builder(4, -1.0).floor(0.0).centre(0.0, 0.0)), "cloth.size_m");
+        let adaptive =
+            OliveiraCloth::builder(4, 1.0).floor(0.0).centre(0.0, 0.0).integrator(Integrator::AdaptiveEuler);
+        assert_eq!(field_of(adaptive), "integrator");
     }
 }

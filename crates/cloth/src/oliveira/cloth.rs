@@ -245,6 +245,12 @@ impl OliveiraCloth {
         let c = &scene.cloth;
         finite_positive("cloth.size_m", c.size_m)?;
         let n = c.vertices_per_side;
+        if n < 2 {
+            return Err(field(
+                "cloth.vertices_per_side",
+                format!("expected at least 2 vertices a side, found {n}"),
+            ));
+        }
         let (row, col) = c.tracked_vertex;
         if row >= n || col >= n {
             return Err(field(
@@ -428,11 +434,9 @@ impl OliveiraCloth {
         } else {
             self.tentative(dt)?
         };
-        if let Some(vertex) =
-            (0..self.next.x.len()).find(|&i| !(self.next.x[i].is_finite() && self.next.v[i].is_finite()))
-        {
+        if let Some(particle) = self.next.first_non_finite() {
             let (step, time) = (self.steps + 1, self.time + dt);
-            return Err(NonFinite { step, time, particle: vertex, place: None }.into());
+            return Err(NonFinite { step, time, particle, place: None }.into());
         }
         let held_back = match self.self_collision {
             Some(settings) => self.keep_apart(&settings, dt),
