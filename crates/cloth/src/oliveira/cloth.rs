@@ -245,12 +245,6 @@ impl OliveiraCloth {
         let c = &scene.cloth;
         finite_positive("cloth.size_m", c.size_m)?;
         let n = c.vertices_per_side;
-        if n < 2 {
-            return Err(field(
-                "cloth.vertices_per_side",
-                format!("expected at least 2 vertices a side, found {n}"),
-            ));
-        }
         let (row, col) = c.tracked_vertex;
         if row >= n || col >= n {
             return Err(field(
