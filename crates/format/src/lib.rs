@@ -13,6 +13,9 @@
 //! [`ron_text::struct_name`] sniffs which struct a RON file holds, so a reader can tell a file's kind
 //! without parsing it twice.
 //!
+//! [`limits`] holds the largest counts any reader accepts (particles, steps, bodies, states, an
+//! optimiser's population and budget), so that every file kind is checked against the same numbers.
+//!
 //! This crate does no file I/O and knows no anima type: it is the leaf that `anima-body`,
 //! `anima-control` and `anima-scene` read their files through.
 //!
@@ -28,6 +31,7 @@
 //! ```
 
 mod error;
+pub mod limits;
 pub mod ron_path;
 pub mod ron_text;
 

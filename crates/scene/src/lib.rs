@@ -48,10 +48,12 @@
 //! ```
 
 pub mod body;
+/// The largest scene anima agrees to build; defined beside the file formats so that every reader
+/// (skeletons, controllers, optimisation specs, scenes) checks against the same numbers.
+pub use anima_format::limits;
 pub mod character;
 mod error;
 pub mod flex3d;
-pub mod limits;
 mod load;
 pub mod oliveira;
 pub mod optimisation;

@@ -1,10 +1,13 @@
-//! The largest scene anima agrees to build, stated in one place.
+//! The largest scene, figure and optimisation anima agrees to build, stated in one place.
 //!
-//! A scene file declares sizes and counts (a grid's rows and columns, a number of fixed points, a
-//! duration and a step); a reader checks each against these limits, with checked arithmetic, before it
-//! allocates anything for it, so a hostile or mistyped number is an error that names where it is
-//! written, never an abort for want of memory or a run that does not end. The numbers are generous for
-//! what the models mean: the largest thesis scene has 800 particles and 145 000 steps.
+//! A file declares sizes and counts (a grid's rows and columns, a number of fixed points, a duration
+//! and a step, a skeleton's bodies, a controller's states, an optimiser's population and budget); a
+//! reader checks each against these limits, with checked arithmetic, before it allocates anything for
+//! it, so a hostile or mistyped number is an error that names where it is written, never an abort for
+//! want of memory or a run that does not end. The Python package checks the same numbers. They are
+//! generous for what the models mean: the largest thesis scene has 800 particles and 145 000 steps,
+//! the thesis figure 15 bodies, its largest controller a few dozen states, its searches a few thousand
+//! evaluations.
 
 /// Particles in one scene (all surfaces, or one sheet or cloth): 4 million, about 1 GB of state,
 /// springs and solver scratch.
@@ -18,6 +21,21 @@ pub const MAX_FRAMES: f64 = 1e6;
 
 /// Bytes of one scene file or part: 256 MiB (the Stanford Bunny's OBJ is 3 MB).
 pub const MAX_FILE_BYTES: u64 = 256 << 20;
+
+/// Bodies of one skeleton, and joints of one (a joint joins two bodies): 1 000. Rapier holds about
+/// 80 kB per multibody link, so this caps a figure near 100 MB; a crowd belongs in several files.
+pub const MAX_BODIES: usize = 1_000;
+
+/// States of one controller's graph (and transitions out of one state): 10 000.
+pub const MAX_STATES: usize = 10_000;
+
+/// Candidates in one generation of an optimiser (CMA-ES's λ, a random search's or annealing's batch):
+/// 10 000.
+pub const MAX_POPULATION: usize = 10_000;
+
+/// Evaluations of one optimisation (its budget, a greedy stage's evaluations): 10⁶. The run's log
+/// keeps every one, about 250 bytes each for the thesis's parameter counts.
+pub const MAX_EVALUATIONS: usize = 1_000_000;
 
 /// Why a run of `duration_s` at steps of `dt_s` writing `frame_rate_hz` frames per second cannot be
 /// run, or `None` when it can. Times are checked positive and finite elsewhere.
