@@ -261,6 +261,11 @@ pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> 
     if spec.evaluations == 0 {
         return Err(file.invalid_at(text, "evaluations", "expected at least one evaluation".into()));
     }
+    // The name becomes two file names in the output folder: a path would write (and, with `--fresh`,
+    // delete) files elsewhere.
+    if let Some(why) = anima_format::not_a_plain_name(&spec.name) {
+        return Err(file.invalid_at(text, "name", format!("expected {why}, found {:?}", spec.name)));
+    }
     let controller = file.controller(&spec.controller)?;
     Ok(LoadedOptimisation { spec, controller })
 }
