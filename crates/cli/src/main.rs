@@ -214,9 +214,13 @@ struct RunArgs {
     /// Simulated duration in seconds (overrides the scene's).
     #[arg(long)]
     duration: Option<f64>,
-    /// Where to write the JSON summary (default: OUT/summary.json).
+    /// Where to write the JSON summary (default: OUT/summary.json). A file outside OUT that is
+    /// already there is replaced only with --force; a folder, device or FIFO never.
     #[arg(long)]
     summary: Option<PathBuf>,
+    /// Replace an existing --summary file outside OUT.
+    #[arg(long)]
+    force: bool,
     /// Gravity (FLEX3D and Oliveira scenes): on (0, −9.8, 0), off, or gx,gy,gz. A .PAR script without
     /// GRAVIDADE defaults to on.
     #[arg(long, value_parser = parse_gravity)]
@@ -428,6 +432,15 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     }
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.
+    anima_run::output::check_output_path(&summary_path)?;
+    if args.summary.is_some() && !args.force && summary_path.exists() && !summary_path.starts_with(&args.out)
+    {
+        anyhow::bail!(
+            "{} exists and is not in the output folder {}; pass --force to replace it",
+            summary_path.display(),
+            args.out.display()
+        );
+    }
     anima_run::output::check_writable(
         summary_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")),
     )?;
@@ -596,6 +609,7 @@ fn convert_command(input: &Path, output: Option<PathBuf>, force: bool, gravity: 
     if same(input, &out) {
         anyhow::bail!("{}: the output would overwrite the input; name another with -o", out.display());
     }
+    anima_run::output::check_output_path(&out)?;
     if out.exists() && !force {
         anyhow::bail!("{} exists; pass --force to overwrite it", out.display());
     }

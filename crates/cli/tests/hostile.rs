@@ -292,3 +292,64 @@ fn an_interrupted_run_leaves_no_temporary_file() {
     assert!(hidden.is_empty(), "temporary files left behind: {hidden:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Round 2: an optimisation spec's name is a plain name, never a path (it becomes two file names in
+/// `--out`); nothing is written or deleted outside `--out`.
+#[test]
+fn spec_names_are_data_not_paths() {
+    let dir = temp_dir("spec-names");
+    for bad in ["../../escaped/x", "/tmp/anima-escaped", ".hidden"] {
+        let spec = dir.join("spec.ron");
+        let text = std::fs::read_to_string(assets("optimisations/throw.ron"))
+            .unwrap()
+            .replace("\"throw-greedy-capped\"", &format!("{bad:?}"))
+            .replace("\"../controllers/throw.ron\"", &format!("{:?}", assets("controllers/throw.ron")));
+        std::fs::write(&spec, text).unwrap();
+        let o = anima()
+            .args(["optimise", "--quiet", "--fresh", "--out"])
+            .arg(dir.join("out"))
+            .arg(&spec)
+            .output()
+            .unwrap();
+        refused(&o, &["spec.ron: line 8, column 5: field `name`", bad]);
+        assert!(all_files(&dir).iter().all(|p| p == &spec), "{bad}: nothing written: {:?}", all_files(&dir));
+    }
+    assert!(!Path::new("/tmp/anima-escaped.log.ron").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Round 2: an output path where a folder, a device or a FIFO stands is refused before the run, and an
+/// existing file outside `--out` is replaced only with `--force`.
+#[test]
+fn outputs_go_to_new_or_regular_files_only() {
+    let dir = temp_dir("output-kinds");
+    let curtain = assets("flex3d/curtain.ron");
+    let with_summary = |summary: &Path, extra: &[&str]| {
+        let mut c = anima();
+        c.args(["run", "--quiet", "--no-pictures", "--duration", "1", "--out"]).arg(dir.join("out"));
+        c.arg("--summary").arg(summary).args(extra).arg(&curtain).output().unwrap()
+    };
+    std::fs::create_dir_all(dir.join("folder")).unwrap();
+    refused(&with_summary(&dir.join("folder"), &[]), &["is a folder"]);
+    refused(&with_summary(Path::new("/"), &["--force"]), &["names no file"]);
+    if Path::new("/dev/null").exists() {
+        refused(&with_summary(Path::new("/dev/null"), &["--force"]), &["not a regular file"]);
+        let o = anima()
+            .args(["convert", "--force", "-o", "/dev/null"])
+            .arg(assets("flex3d/a2-2-vento.par"))
+            .output()
+            .unwrap();
+        refused(&o, &["not a regular file"]);
+    }
+    let fifo = dir.join("fifo");
+    if Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()) {
+        refused(&with_summary(&fifo, &["--force"]), &["not a regular file"]);
+        assert!(std::fs::symlink_metadata(&fifo).is_ok_and(|m| !m.is_file()), "the FIFO is kept");
+    }
+    std::fs::write(dir.join("mine.json"), "keep").unwrap();
+    refused(&with_summary(&dir.join("mine.json"), &[]), &["pass --force"]);
+    assert_eq!(std::fs::read_to_string(dir.join("mine.json")).unwrap(), "keep");
+    assert!(with_summary(&dir.join("mine.json"), &["--force"]).status.success());
+    assert!(std::fs::read_to_string(dir.join("mine.json")).unwrap().contains("\"steps\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -59,8 +59,35 @@ pub fn is_frame_file(name: &str, prefix: &str, suffix: &str) -> bool {
         .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
 }
 
-/// Writes `path` through `fill`, atomically (temporary file, then rename).
+/// Refuses to write `path` where something other than a regular file stands: a folder, a device, a
+/// FIFO or a socket would be replaced by the rename of [`write_atomic`] (or, for a folder, the write
+/// would fail after the run). A symbolic link is replaced, never written through, so it is allowed.
+pub fn check_output_path(path: &Path) -> Result<()> {
+    if path.file_name().is_none() {
+        anyhow::bail!("{} names no file to write", path.display());
+    }
+    match fs::symlink_metadata(path) {
+        Ok(meta) => {
+            let kind = meta.file_type();
+            if kind.is_file() || kind.is_symlink() {
+                Ok(())
+            } else {
+                let what =
+                    if kind.is_dir() { "a folder" } else { "not a regular file (a device, FIFO or socket)" };
+                anyhow::bail!(
+                    "{} is {what}; anima writes its output to a new or regular file only",
+                    path.display()
+                )
+            }
+        }
+        Err(_) => Ok(()),
+    }
+}
+
+/// Writes `path` through `fill`, atomically (temporary file, then rename), refusing a path where
+/// something other than a regular file stands ([`check_output_path`]).
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+    check_output_path(path)?;
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let name = path.file_name().with_context(|| format!("{} has no file name", path.display()))?;
@@ -102,6 +129,25 @@ mod tests {
         assert!(!is_frame_file("toalha_.OBT", "toalha_", ".OBT"));
         assert!(!is_frame_file("toalha_1x.OBT", "toalha_", ".OBT"));
         assert!(!is_frame_file("summary.json", "toalha_", ".OBT"));
+    }
+
+    #[test]
+    fn only_new_or_regular_files_are_written() {
+        let dir = std::env::temp_dir().join(format!("anima-output-kinds-{}", std::process::id()));
+        fs::create_dir_all(dir.join("folder")).unwrap();
+        let e = write_atomic(&dir.join("folder"), |w| Ok(w.write_all(b"x")?)).unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+        assert!(dir.join("folder").is_dir(), "the folder is kept");
+        #[cfg(unix)]
+        {
+            let e = write_atomic(Path::new("/dev/null"), |w| Ok(w.write_all(b"x")?)).unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
+        assert!(check_output_path(Path::new("/")).is_err(), "the root names no file");
+        write_atomic(&dir.join("new.txt"), |w| Ok(w.write_all(b"new")?)).unwrap();
+        write_atomic(&dir.join("new.txt"), |w| Ok(w.write_all(b"again")?)).unwrap();
+        assert_eq!(fs::read_to_string(dir.join("new.txt")).unwrap(), "again");
+        fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
