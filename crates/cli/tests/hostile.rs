@@ -353,3 +353,35 @@ fn outputs_go_to_new_or_regular_files_only() {
     assert!(std::fs::read_to_string(dir.join("mine.json")).unwrap().contains("\"steps\""));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Round 2: a value is checked where it is read (a strain limit that is not a positive strain), and a
+/// summary counts what happened with every integrator, adaptive ones included; an adaptive run that
+/// crawls ends on its own step budget.
+#[test]
+fn round_two_values_and_summaries() {
+    let dir = temp_dir("round-two");
+    for bad in ["Some(-1.0)", "Some(NaN)", "Some(0.0)"] {
+        let scene = edited(
+            &dir,
+            "scenes/drape-sphere-65.ron",
+            "self_collision: Modern)",
+            &format!("self_collision: Modern, strain_limit: {bad})"),
+            "strain.ron",
+        );
+        refused(&run(&dir, &scene, &[]), &["strain.ron", "strain_limit", "positive, finite strain"]);
+    }
+    let sheet = assets("scenes/standard-sheet-64.ron");
+    let summary = |out: &Path| std::fs::read_to_string(out.join("summary.json")).unwrap();
+    for integrator in ["dopri5", "adaptive-euler"] {
+        let o = run(&dir, &sheet, &["--duration", "0.1", "--integrator", integrator]);
+        assert!(o.status.success(), "{integrator}: {}", String::from_utf8_lossy(&o.stderr));
+        let s = summary(&dir.join("out"));
+        assert!(!s.contains("\"steps\": 0,"), "{integrator} counts its steps: {s}");
+        assert!(s.contains("\"simulated_seconds\": 0.1"), "{integrator}: {s}");
+        assert!(s.contains("\"frames\": 3,"), "{integrator}: {s}");
+    }
+    let o = run(&dir, &sheet, &["--duration", "0.4", "--dt", "0.03", "--integrator", "dopri5"]);
+    assert_eq!(o.status.code(), Some(2), "a crawling run stops: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(summary(&dir.join("out")).contains("adaptive steps, 100 times the 13 steps"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -230,6 +230,14 @@ impl OliveiraCloth {
         if !(0.0..=1.0).contains(&eta) {
             return Err(field("options.bending_height_floor", format!("must lie in [0, 1], got {eta}")));
         }
+        if let Some(tau) = scene.options.strain_limit
+            && !(tau.is_finite() && tau > 0.0)
+        {
+            return Err(field(
+                "options.strain_limit",
+                format!("must be a positive, finite strain, got {tau}"),
+            ));
+        }
         if let Some(name) = scene.material.invalid_field() {
             return Err(field("material", format!("field `{name}` is out of range")));
         }

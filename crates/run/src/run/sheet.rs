@@ -9,7 +9,7 @@ use anima_cloth::membrane::{MembraneSheetSpec, MembraneSim};
 use anima_cloth::network_sim::NetworkSim;
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3, grid_triangles};
-use anima_ode::{OdeSystem, State, StepControl, Stepper, integrate};
+use anima_ode::{IntegrationError, OdeSystem, State, StepControl, Stepper, integrate};
 use anima_scene::sheet::{SheetModel, SheetScene};
 use anima_viz::gltf::UpAxis;
 use anima_viz::{Camera, Image, RenderMesh, RenderSettings, render};
@@ -126,38 +126,61 @@ pub fn run(
     let mut watch = CrossingWatch::default();
     let mut output = OutputClock::default();
     let mut frames = 0;
+    // What the adaptive methods did (the model's own clock counts fixed steps only).
+    let mut adaptive_steps: Option<(u64, f64)> = None;
     if scene.integrator.is_adaptive() {
-        // Adaptive methods choose their own steps: run the whole interval under the embedded controller.
+        // Adaptive methods choose their own steps under the embedded controller, frame by frame, each
+        // frame starting at the step the last one ended with; at most ADAPTIVE_STEP_BUDGET times the
+        // fixed-step count, so that a stiff sheet the controller crawls through ends on its own.
         let mut stepper = Stepper::new(scene.integrator, n);
         let mut state = State::new(sim.model().positions().to_vec(), sim.model().velocities().to_vec());
         let mut scratch = State::zeros(n);
-        let control =
-            StepControl::Adaptive { tolerance: 1e-6, dt_initial: scene.dt_s, dt_min: 1e-8, dt_max: 0.01 };
-        match integrate(
-            sim.system(),
-            &mut stepper,
-            control,
-            0.0,
-            scene.duration_s,
-            &mut state,
-            &mut scratch,
-            |_, _| {},
-        ) {
-            Ok(stats) => {
-                if let Cloth::Springs(s) = &mut sim {
-                    s.stats.evaluations = stats.evaluations;
+        let budget = (ADAPTIVE_STEP_BUDGET * n_steps.max(1)) as u64;
+        let (mut t, mut h, mut taken, mut evaluations) = (0.0, scene.dt_s, 0u64, 0usize);
+        for k in 1..=n_frames {
+            let t_end = if k == n_frames { scene.duration_s } else { k as f64 / scene.frame_rate_hz };
+            let control =
+                StepControl::Adaptive { tolerance: 1e-6, dt_initial: h, dt_min: 1e-8, dt_max: 0.01 };
+            let mut last_h = h;
+            let stepped =
+                integrate(sim.system(), &mut stepper, control, t, t_end, &mut state, &mut scratch, |_, _| {});
+            match stepped {
+                Ok(stats) => {
+                    taken += stats.steps as u64;
+                    evaluations += stats.evaluations;
+                    if stats.largest_dt > 0.0 {
+                        last_h = stats.largest_dt.min(0.01);
+                    }
+                    t = t_end;
+                }
+                Err(e) => {
+                    diverged = matches!(e, IntegrationError::NonFinite { .. });
+                    error = Some(e.to_string());
+                    break;
                 }
             }
-            Err(e) => error = Some(e.to_string()),
+            h = last_h;
+            frames = k;
+            sim.model_mut().set_state(&state.x, &state.v);
+            watch.look(sim.model().positions(), &triangles);
+            progress.advance(((t / scene.duration_s) * n_steps as f64) as u64);
+            output.time(|| {
+                let frame = Frame { k, t, x: sim.model().positions(), triangles: &triangles };
+                frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
+            })?;
+            if taken > budget && k < n_frames {
+                error = Some(format!(
+                    "stopped at t = {t} s after {taken} adaptive steps, {ADAPTIVE_STEP_BUDGET} times the {n_steps} steps \
+                     of the scene's dt_s: the controller is crawling (a stiff or diverging sheet); try a fixed-step \
+                     or implicit integrator"
+                ));
+                break;
+            }
         }
-        sim.model_mut().set_state(&state.x, &state.v);
-        frames = n_frames;
-        // The embedded controller gives no frames on the way: the export holds the start and the end.
-        if let Some(e) = &mut export
-            && error.is_none()
-        {
-            e.deforming_frame(n_frames, scene.duration_s, |_| sim.model().positions());
+        if let Cloth::Springs(s) = &mut sim {
+            s.stats.evaluations = evaluations;
         }
+        adaptive_steps = Some((taken, t));
     } else {
         for k in 1..=n_frames {
             let target = if k == n_frames {
@@ -174,19 +197,10 @@ pub fn run(
             frames = k;
             watch.look(sim.model().positions(), &triangles);
             progress.advance(sim.model().steps());
-            output.time(|| -> Result<()> {
-                if let Some(e) = &mut export {
-                    e.deforming_frame(k, sim.model().time(), |_| sim.model().positions());
-                }
-                if let Some(dir) = opts.frame_dir() {
-                    write_atomic(&dir.join(format!("sheet_{k}.obj")), |w| {
-                        Ok(write_obj(w, "sheet", sim.model().positions(), &triangles)?)
-                    })?;
-                }
-                if opts.picture_dir().is_some() && shown.contains(&k) {
-                    snapshots.push((k, sim.model().time(), sim.model().positions().to_vec()));
-                }
-                Ok(())
+            output.time(|| {
+                let frame =
+                    Frame { k, t: sim.model().time(), x: sim.model().positions(), triangles: &triangles };
+                frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
         }
     }
@@ -195,14 +209,14 @@ pub fn run(
     progress.end();
     let x = sim.model().positions();
     watch.look(x, &triangles);
-    let steps = sim.model().steps();
+    let (steps, simulated_seconds) = adaptive_steps.unwrap_or((sim.model().steps(), sim.model().time()));
     super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "sheet",
         steps,
         frames,
-        simulated_seconds: sim.model().time(),
+        simulated_seconds,
         wall_seconds,
         output_seconds,
         all_finite: !diverged && x.iter().chain(sim.model().velocities()).all(|p| p.is_finite()),
@@ -246,6 +260,44 @@ pub fn run(
         write_pictures(dir, x, sim.model().time(), &snapshots, &triangles)?;
     }
     Ok(summary)
+}
+
+/// Adaptive integrators may take many times the scene's fixed-step count (they are not held to
+/// `dt_s`), but not without bound: a sheet the step controller crawls through is stopped past this
+/// multiple of `duration_s / dt_s` accepted steps, with a message saying so.
+const ADAPTIVE_STEP_BUDGET: usize = 100;
+
+/// One output frame of a sheet run: written as OBJ, added to the glTF export, and kept for the
+/// pictures when `snapshot` is given.
+struct Frame<'a> {
+    k: usize,
+    t: f64,
+    x: &'a [DVec3],
+    triangles: &'a [[u32; 3]],
+}
+
+impl Frame<'_> {
+    fn write(
+        &self,
+        opts: &RunOptions,
+        export: Option<&mut GltfExport>,
+        snapshot: Option<&mut Vec<(usize, f64, Vec<DVec3>)>>,
+    ) -> Result<()> {
+        if let Some(e) = export {
+            e.deforming_frame(self.k, self.t, |_| self.x);
+        }
+        if let Some(dir) = opts.frame_dir() {
+            write_atomic(&dir.join(format!("sheet_{}.obj", self.k)), |w| {
+                Ok(write_obj(w, "sheet", self.x, self.triangles)?)
+            })?;
+        }
+        if opts.picture_dir().is_some()
+            && let Some(s) = snapshot
+        {
+            s.push((self.k, self.t, self.x.to_vec()));
+        }
+        Ok(())
+    }
 }
 
 /// The cloth of a sheet scene, in either model (also what [`crate::sim::ClothSim`] steps).
