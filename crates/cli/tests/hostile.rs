@@ -370,6 +370,16 @@ fn round_two_values_and_summaries() {
         );
         refused(&run(&dir, &scene, &[]), &["strain.ron", "strain_limit", "positive, finite strain"]);
     }
+    // A Bunny scaled past what f64 can measure: refused by its size, not by a NaN volume.
+    let text = std::fs::read_to_string(assets("scenes/drape-bunny-65.ron")).unwrap();
+    let bunny = format!("{:?}", assets("meshes/bunny.obj"));
+    let huge = dir.join("huge.ron");
+    std::fs::write(
+        &huge,
+        text.replace("length_m: 0.5", "length_m: 1e200").replace("\"../meshes/bunny.obj\"", &bunny),
+    )
+    .unwrap();
+    refused(&run(&dir, &huge, &[]), &["huge.ron", "length_m must be at most 1e6 m"]);
     let sheet = assets("scenes/standard-sheet-64.ron");
     let summary = |out: &Path| std::fs::read_to_string(out.join("summary.json")).unwrap();
     for integrator in ["dopri5", "adaptive-euler"] {

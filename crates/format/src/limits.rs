@@ -22,6 +22,11 @@ pub const MAX_FRAMES: f64 = 1e6;
 /// Bytes of one scene file or part: 256 MiB (the Stanford Bunny's OBJ is 3 MB).
 pub const MAX_FILE_BYTES: u64 = 256 << 20;
 
+/// Lengths and coordinates of a scene's objects (a mesh's placed size and position, a sphere's
+/// radius, a floor's point): 10⁶ m. Beyond it a mesh's volume and a cloth's contact tolerances leave
+/// f64's useful range (a Bunny scaled to 10²⁰⁰ m has no finite volume), and no cloth scene means it.
+pub const MAX_LENGTH_M: f64 = 1e6;
+
 /// Bodies of one skeleton, and joints of one (a joint joins two bodies): 1 000. Rapier holds about
 /// 80 kB per multibody link, so this caps a figure near 100 MB; a crowd belongs in several files.
 pub const MAX_BODIES: usize = 1_000;

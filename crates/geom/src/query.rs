@@ -47,6 +47,8 @@ pub enum SolidError {
     Open(usize),
     #[error("the mesh encloses negative volume ({0:e} m³): its triangles face inwards")]
     InsideOut(f64),
+    #[error("the mesh's volume is out of f64's range ({0:e} m³): its coordinates are too large")]
+    OutOfRange(f64),
     #[error("the mesh has no triangles")]
     Empty,
 }
@@ -251,7 +253,10 @@ impl MeshSolid {
             return Err(SolidError::Open(open));
         }
         let volume = mesh.signed_volume();
-        if volume.is_nan() || volume <= 0.0 {
+        if !volume.is_finite() {
+            return Err(SolidError::OutOfRange(volume));
+        }
+        if volume <= 0.0 {
             return Err(SolidError::InsideOut(volume));
         }
         let normals = (0..mesh.n_triangles())

@@ -178,11 +178,24 @@ fn build_collider(
     if !(desc.friction.is_finite() && desc.friction >= 0.0) {
         return Err(err(format!("friction must be non-negative, got {}", desc.friction)));
     }
+    let max = anima_format::limits::MAX_LENGTH_M;
     let positive = |what: &str, v: f64| {
-        if v.is_finite() && v > 0.0 { Ok(()) } else { Err(err(format!("{what} must be positive, got {v}"))) }
+        if !(v.is_finite() && v > 0.0) {
+            Err(err(format!("{what} must be positive, got {v}")))
+        } else if v > max {
+            Err(err(format!("{what} must be at most {max:e} m, got {v:e}")))
+        } else {
+            Ok(())
+        }
     };
     let finite = |what: &str, v: DVec3| {
-        if v.is_finite() { Ok(()) } else { Err(err(format!("{what} must be finite"))) }
+        if !v.is_finite() {
+            Err(err(format!("{what} must be finite")))
+        } else if v.abs().max_element() > max {
+            Err(err(format!("{what} must lie within {max:e} m of the origin")))
+        } else {
+            Ok(())
+        }
     };
     let solid = match &desc.shape {
         ShapeDesc::Mesh { file, up, length_m, base_centre_m } => {
