@@ -261,6 +261,9 @@ pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> 
     if spec.evaluations == 0 {
         return Err(file.invalid_at(text, "evaluations", "expected at least one evaluation".into()));
     }
+    if let Some((field, why)) = spec.count_problem() {
+        return Err(file.invalid_at(text, &field, why));
+    }
     // The name becomes two file names in the output folder: a path would write (and, with `--fresh`,
     // delete) files elsewhere.
     if let Some(why) = anima_format::not_a_plain_name(&spec.name) {

@@ -5,6 +5,7 @@
 
 use anima_control::optimise::{AnnealingConfig, Stage};
 use anima_control::{Controller, Selection};
+use anima_format::limits::{MAX_EVALUATIONS, MAX_POPULATION, MAX_STEPS};
 use serde::{Deserialize, Serialize};
 
 /// What an evaluation measures (higher is better).
@@ -48,6 +49,62 @@ pub struct OptimisationSpec {
     /// Evaluations in all, counting the starting point.
     pub evaluations: usize,
     pub seed: u64,
+}
+
+impl OptimisationSpec {
+    /// The first count of the spec above anima's [limits](crate::limits) — the budget, a greedy
+    /// stage's evaluations or batch, CMA-ES's λ, a random search's or annealing's batch, the
+    /// objective's iterations — as the field's path and what was expected there; `None` when every
+    /// count is within them. Checked before any optimiser is built, so a hostile number is an error
+    /// that names its line, never an allocation that aborts or a run that does not end.
+    pub fn count_problem(&self) -> Option<(String, String)> {
+        let over = |field: String, what: &str, max: String, found: String| {
+            Some((field, format!("expected at most {max} {what} (anima's limit), found {found}")))
+        };
+        let iterations = match self.objective {
+            ObjectiveSpec::Walk { iterations } | ObjectiveSpec::Throw { iterations, .. } => iterations,
+        };
+        // u64 to f64 rounds, but only far above the limit, where it cannot turn a refusal into a run.
+        if iterations as f64 > MAX_STEPS {
+            return over(
+                "objective.iterations".into(),
+                "control steps",
+                format!("{MAX_STEPS:e}"),
+                iterations.to_string(),
+            );
+        }
+        if self.evaluations > MAX_EVALUATIONS {
+            return over(
+                "evaluations".into(),
+                "evaluations",
+                MAX_EVALUATIONS.to_string(),
+                self.evaluations.to_string(),
+            );
+        }
+        let population = |field: &str, n: usize| {
+            if n > MAX_POPULATION {
+                over(field.into(), "candidates a generation", MAX_POPULATION.to_string(), n.to_string())
+            } else {
+                None
+            }
+        };
+        match &self.optimiser {
+            OptimiserSpec::Greedy { stages } => stages.iter().enumerate().find_map(|(k, st)| {
+                if st.evaluations > MAX_EVALUATIONS {
+                    return over(
+                        format!("optimiser.stages[{k}].evaluations"),
+                        "evaluations",
+                        MAX_EVALUATIONS.to_string(),
+                        st.evaluations.to_string(),
+                    );
+                }
+                population(&format!("optimiser.stages[{k}].batch"), st.batch)
+            }),
+            OptimiserSpec::Cmaes { lambda, .. } => population("optimiser.lambda", lambda.unwrap_or(0)),
+            OptimiserSpec::RandomSearch { batch } => population("optimiser.batch", *batch),
+            OptimiserSpec::Annealing(cfg) => population("optimiser.batch", cfg.batch),
+        }
+    }
 }
 
 /// A spec with its controller.
