@@ -5,9 +5,10 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::{Normal, OptimiseError, Optimiser, Space, reflect, uniform};
+use super::{Normal, OptimiseError, Optimiser, Space, check_population, reflect, uniform};
 
-/// Uniform samples of the whole box, `batch` per generation; keeps the best.
+/// Uniform samples of the whole box, `batch` per generation (at most
+/// [`MAX_POPULATION`](anima_format::limits::MAX_POPULATION)); keeps the best.
 #[derive(Debug, Clone)]
 pub struct RandomSearch {
     space: Space,
@@ -19,6 +20,7 @@ pub struct RandomSearch {
 impl RandomSearch {
     pub fn new(space: Space, batch: usize, seed: u64) -> Result<Self, OptimiseError> {
         space.check_bounded("random search")?;
+        check_population("a random search's batch", batch)?;
         Ok(Self { space, batch: batch.max(1), rng: ChaCha8Rng::seed_from_u64(seed), best: None })
     }
 }
@@ -68,7 +70,8 @@ pub struct AnnealingConfig {
     /// Gaussian step, as a fraction of each dimension's width.
     pub step: f64,
     /// Proposals per generation, all from the state at the start of the generation and then
-    /// accepted or rejected in order (1 is classical annealing; more evaluates in parallel).
+    /// accepted or rejected in order (1 is classical annealing; more evaluates in parallel). At most
+    /// [`MAX_POPULATION`](anima_format::limits::MAX_POPULATION).
     pub batch: usize,
 }
 
@@ -89,6 +92,7 @@ pub struct Annealing {
 impl Annealing {
     pub fn new(space: Space, cfg: AnnealingConfig, seed: u64) -> Result<Self, OptimiseError> {
         space.check_bounded("simulated annealing")?;
+        check_population("annealing's batch", cfg.batch)?;
         let t0_ok = cfg.t0 > 0.0 && cfg.t0.is_finite();
         let cooling_ok = cfg.cooling > 0.0 && cfg.cooling <= 1.0;
         if cfg.x0.len() != space.len() || !t0_ok || !cooling_ok {

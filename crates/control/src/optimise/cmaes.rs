@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::eigen::symmetric_eigen;
-use super::{Normal, OptimiseError, Optimiser, Space, reflect, uniform};
+use super::{MAX_POPULATION, Normal, OptimiseError, Optimiser, Space, check_population, reflect, uniform};
 
 /// CMA-ES settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -22,10 +22,11 @@ pub struct CmaesConfig {
     pub x0: Vec<f64>,
     /// Initial step size, in units of each bounded dimension's width (absolute for an unbounded one).
     pub sigma0: f64,
-    /// Population size λ; `None` for 4 + ⌊3 ln n⌋.
+    /// Population size λ, at most [`MAX_POPULATION`]; `None` for 4 + ⌊3 ln n⌋.
     pub lambda: Option<usize>,
     /// IPOP restarts after a stop criterion (0: plain CMA-ES, which then finishes). A restart starts
-    /// from a uniform point of the box (x0 for unbounded dimensions) with λ multiplied by `increase`.
+    /// from a uniform point of the box (x0 for unbounded dimensions) with λ multiplied by `increase`,
+    /// up to [`MAX_POPULATION`].
     pub restarts: usize,
     pub increase: f64,
     /// Finish as soon as a fitness ≥ target is seen.
@@ -135,6 +136,7 @@ impl Cmaes {
         let hi: Vec<f64> = space.dims.iter().zip(&scale).map(|(d, s)| d.max / s).collect();
         let nf = n as f64;
         let lambda = cfg.lambda.unwrap_or(4 + (3.0 * nf.ln()).floor() as usize);
+        check_population("λ", lambda)?;
         let mean: Vec<f64> = (0..n).map(|i| reflect(cfg.x0[i] / scale[i], lo[i], hi[i])).collect();
         let mut me = Self {
             st: Strategy::new(n, lambda),
@@ -261,8 +263,9 @@ impl Cmaes {
 
     fn start_restart(&mut self) {
         self.restart += 1;
+        // `as` saturates, so even an infinite increase stops at the limit.
         let lambda = ((self.st.lambda as f64) * self.cfg.increase).round() as usize;
-        self.st = Strategy::new(self.n, lambda.max(self.st.lambda));
+        self.st = Strategy::new(self.n, lambda.max(self.st.lambda).min(MAX_POPULATION));
         for i in 0..self.n {
             self.mean[i] = if self.lo[i].is_finite() && self.hi[i].is_finite() {
                 uniform(&mut self.rng, self.lo[i], self.hi[i])

@@ -6,7 +6,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::{Interval, Modifier, OptimiseError, Optimiser, Space, propose};
+use super::{
+    Interval, MAX_EVALUATIONS, Modifier, OptimiseError, Optimiser, Space, check_population, propose,
+};
 
 /// One stage: which dimensions, how many evaluations, which modifier.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -14,13 +16,14 @@ pub struct Stage {
     pub name: String,
     /// Indices into the space of the dimensions this stage may change.
     pub dims: Vec<usize>,
+    /// At most [`MAX_EVALUATIONS`](anima_format::limits::MAX_EVALUATIONS).
     pub evaluations: usize,
     pub modifier: Modifier,
     /// Candidates drawn per generation for the local modifiers, all from the incumbent at the start of
     /// the generation and then accepted in order. 1 (the thesis) makes every candidate a perturbation
     /// of the latest incumbent; more evaluates in parallel at the cost of that. A global stage ignores
     /// it: its candidates do not depend on the incumbent, so the whole stage is one generation with
-    /// the same result.
+    /// the same result. At most [`MAX_POPULATION`](anima_format::limits::MAX_POPULATION).
     pub batch: usize,
 }
 
@@ -77,6 +80,13 @@ impl GreedySearch {
             )));
         }
         for (k, st) in stages.iter().enumerate() {
+            if st.evaluations > MAX_EVALUATIONS {
+                return Err(OptimiseError::Config(format!(
+                    "stage {k} must have at most {MAX_EVALUATIONS} evaluations (anima's limit), found {}",
+                    st.evaluations
+                )));
+            }
+            check_population(&format!("stage {k}'s batch"), st.batch)?;
             let dims: Vec<usize> = match &st.modifier {
                 Modifier::LocalSubset { groups, .. } => groups.iter().flatten().copied().collect(),
                 _ => st.dims.clone(),

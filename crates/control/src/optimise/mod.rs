@@ -24,6 +24,7 @@ pub use cmaes::{Cmaes, CmaesConfig};
 pub use greedy::{GreedySearch, Stage, StageResult};
 pub use modifier::{GroupChoice, Interval, Modifier, propose};
 
+use anima_format::limits::{MAX_EVALUATIONS, MAX_POPULATION};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -102,6 +103,17 @@ pub enum OptimiseError {
     Unbounded { optimiser: String, dim: String },
     #[error("invalid configuration: {0}")]
     Config(String),
+}
+
+/// `Config` error unless `n` (`what`, e.g. "λ") is at most [`MAX_POPULATION`] candidates a generation:
+/// checked before anything is allocated for a generation.
+fn check_population(what: &str, n: usize) -> Result<(), OptimiseError> {
+    if n > MAX_POPULATION {
+        return Err(OptimiseError::Config(format!(
+            "{what} must be at most {MAX_POPULATION} candidates a generation (anima's limit), found {n}"
+        )));
+    }
+    Ok(())
 }
 
 /// What is maximised. Implemented for every `Fn(&[f64]) -> f64 + Sync`.

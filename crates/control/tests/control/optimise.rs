@@ -316,3 +316,49 @@ fn resuming_with_another_seed_is_refused() {
     let mut c = optimisers(1).swap_remove(0);
     assert!(matches!(resume(c.as_mut(), &log), Err(ResumeError::Optimiser { .. })));
 }
+
+/// Populations and budgets above anima's limits are configuration errors, found before anything is
+/// allocated for them (issue #40: λ = 10¹² aborted for want of memory).
+#[test]
+fn populations_and_budgets_above_the_limits_are_refused() {
+    use anima_control::optimise::OptimiseError;
+    use anima_format::limits::{MAX_EVALUATIONS, MAX_POPULATION};
+    let space = Space::cube(4, -1.0, 1.0);
+    let refused = |r: Result<(), OptimiseError>, what: &str| match r {
+        Err(OptimiseError::Config(why)) => assert!(why.contains("at most"), "{what}: {why}"),
+        other => panic!("{what}: {other:?}"),
+    };
+    for lambda in [MAX_POPULATION + 1, 1_000_000_000_000, usize::MAX] {
+        let cfg = CmaesConfig { lambda: Some(lambda), ..CmaesConfig::new(vec![0.0; 4], 0.3) };
+        refused(Cmaes::new(space.clone(), cfg, 1).map(drop), "λ");
+        refused(RandomSearch::new(space.clone(), lambda, 1).map(drop), "random batch");
+        let cfg = AnnealingConfig { x0: vec![0.0; 4], t0: 1.0, cooling: 0.9, step: 0.1, batch: lambda };
+        refused(Annealing::new(space.clone(), cfg, 1).map(drop), "annealing batch");
+        let mut stage = Stage::local_single("l", vec![0], 10, Interval::Fixed);
+        stage.batch = lambda;
+        refused(GreedySearch::new(space.clone(), vec![stage], vec![0.0; 4], 1).map(drop), "stage batch");
+    }
+    let stage = Stage::global("g", vec![0, 1], MAX_EVALUATIONS + 1);
+    refused(GreedySearch::new(space.clone(), vec![stage], vec![0.0; 4], 1).map(drop), "stage evaluations");
+    // At the limits they build (and a generation of 10 000 is asked at once).
+    let cfg = CmaesConfig { lambda: Some(MAX_POPULATION), ..CmaesConfig::new(vec![0.0; 4], 0.3) };
+    assert_eq!(Cmaes::new(space.clone(), cfg, 1).unwrap().ask().len(), MAX_POPULATION);
+    assert_eq!(RandomSearch::new(space.clone(), MAX_POPULATION, 1).unwrap().ask().len(), MAX_POPULATION);
+    let stage = Stage::global("g", vec![0, 1], MAX_EVALUATIONS);
+    assert!(GreedySearch::new(space.clone(), vec![stage], vec![0.0; 4], 1).is_ok());
+}
+
+/// IPOP's growing population stops at the limit, even with an absurd increase.
+#[test]
+fn ipop_restarts_stop_growing_at_the_population_limit() {
+    use anima_format::limits::MAX_POPULATION;
+    let mut cfg = CmaesConfig::new(vec![0.5; 2], 0.3);
+    cfg.increase = f64::INFINITY;
+    cfg.restarts = 3;
+    cfg.tol_x = 1e3; // every run stops after its first generation
+    let mut opt = Cmaes::new(Space::cube(2, 0.0, 1.0), cfg, 1).unwrap();
+    let mut log = RunLog::default();
+    run(&mut opt, &sphere, 50_000, &mut log);
+    assert_eq!(opt.restarts(), 3);
+    assert_eq!(opt.lambda(), MAX_POPULATION);
+}
