@@ -370,7 +370,7 @@ impl RunArgs {
     fn options(&self) -> Result<RunOptions> {
         let reference = match &self.reference {
             Some(p) => {
-                let bytes = std::fs::read(p).with_context(|| format!("reading {}", p.display()))?;
+                let bytes = anima_scene::read_limited(p)?;
                 let mesh =
                     anima_geom::read_obj(&bytes[..]).with_context(|| format!("reading {}", p.display()))?;
                 Some(mesh.vertices().to_vec())
@@ -613,7 +613,7 @@ fn convert_command(input: &Path, output: Option<PathBuf>, force: bool, gravity: 
     if out.exists() && !force {
         anyhow::bail!("{} exists; pass --force to overwrite it", out.display());
     }
-    let bytes = std::fs::read(input).with_context(|| format!("reading {}", input.display()))?;
+    let bytes = anima_scene::read_limited(input)?;
     let name = input.display().to_string();
     let ron = anima_scene::convert_par_to_ron(&bytes, &name, gravity.unwrap_or(FLEX3D_GRAVITY))?;
     anima_run::output::write_atomic(&out, |w| Ok(w.write_all(ron.as_bytes())?))?;

@@ -390,6 +390,12 @@ fn round_two_values_and_summaries() {
         assert!(s.contains("\"simulated_seconds\": 0.1"), "{integrator}: {s}");
         assert!(s.contains("\"frames\": 3,"), "{integrator}: {s}");
     }
+    // Side inputs are read through the scene's size cap, not whole.
+    if Path::new("/dev/zero").exists() {
+        refused(&run(&dir, &sheet, &["--reference", "/dev/zero"]), &["/dev/zero", "at most 256 MiB"]);
+        let o = anima().args(["convert", "/dev/zero", "-o"]).arg(dir.join("zero.ron")).output().unwrap();
+        refused(&o, &["/dev/zero", "at most 256 MiB"]);
+    }
     let o = run(&dir, &sheet, &["--duration", "0.4", "--dt", "0.03", "--integrator", "dopri5"]);
     assert_eq!(o.status.code(), Some(2), "a crawling run stops: {}", String::from_utf8_lossy(&o.stderr));
     assert!(summary(&dir.join("out")).contains("adaptive steps, 100 times the 13 steps"));

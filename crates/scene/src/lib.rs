@@ -67,5 +67,6 @@ pub use error::SceneError;
 pub use flex3d::{LoadedFlex3d, convert_par_to_ron};
 pub use load::{
     LoadOptions, Scene, SceneKind, figures_run_problem, load, load_flex3d, load_oliveira, load_optimisation,
+    read_limited,
 };
 pub use text::decode;

@@ -146,8 +146,9 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
 }
 
 /// The bytes of `path`, at most [`crate::limits::MAX_FILE_BYTES`] of them: a larger file (or an endless
-/// one, a device) is an error before it is read whole.
-fn read_limited(path: &Path) -> Result<Vec<u8>, SceneError> {
+/// one, a device) is an error before it is read whole. What every scene, part and side input (a
+/// reference OBJ, a `.PAR` to convert) is read through.
+pub fn read_limited(path: &Path) -> Result<Vec<u8>, SceneError> {
     use std::io::Read as _;
     let max = crate::limits::MAX_FILE_BYTES;
     let mut bytes = Vec::new();
