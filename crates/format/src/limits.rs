@@ -7,7 +7,8 @@
 //! want of memory or a run that does not end. The Python package checks the same numbers. They are
 //! generous for what the models mean: the largest thesis scene has 800 particles and 145 000 steps,
 //! the thesis figure 15 bodies, its largest controller a few dozen states, its searches a few thousand
-//! evaluations.
+//! evaluations. (The OBJ reader's bound on a polygon's corners is `anima_geom::MAX_FACE_CORNERS`:
+//! `anima-geom` depends on no anima crate.)
 
 /// Particles in one scene (all surfaces, or one sheet or cloth): 4 million, about 1 GB of state,
 /// springs and solver scratch.

@@ -26,6 +26,11 @@ pub enum ObjError {
     Mesh(#[from] MeshError),
 }
 
+/// Corners of one face, at most. A polygon of k corners becomes k − 2 triangles from two bytes of file a
+/// corner, so without a bound a file of one long polygon costs far more memory per byte than a file of
+/// triangles (a 60 MB one-polygon file once took 2.75 GB); real meshes' polygons have a handful.
+pub const MAX_FACE_CORNERS: usize = 256;
+
 /// A face corner as written: the 1-based (or negative, relative) index and where it stood.
 #[derive(Debug, Clone, Copy)]
 struct Corner {
@@ -79,6 +84,13 @@ pub fn read_obj(r: impl Read) -> Result<TriangleMesh, ObjError> {
             "f" => {
                 let mut corners = Vec::new();
                 for (column, text) in tokens {
+                    if corners.len() == MAX_FACE_CORNERS {
+                        return Err(syntax(
+                            column,
+                            &format!("at most {MAX_FACE_CORNERS} corners in a face"),
+                            "more",
+                        ));
+                    }
                     let first = text.split('/').next().unwrap_or_default();
                     let index =
                         first.parse::<i64>().ok().filter(|&i| i != 0).ok_or_else(|| {
@@ -144,6 +156,21 @@ fn tokens_with_columns(s: &str) -> impl Iterator<Item = (usize, &str)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn one_long_polygon_is_refused_at_its_corner_bound() {
+        let mut src: String = (0..300).map(|k| format!("v {k} {} 0\n", k * k)).collect();
+        src.push_str("f");
+        for k in 1..=300 {
+            src.push_str(&format!(" {k}"));
+        }
+        let e = read_obj(src.as_bytes()).unwrap_err().to_string();
+        assert!(e.starts_with("301:") && e.contains("at most 256 corners in a face"), "{e}");
+        // At the bound it is read.
+        let cut: String = src.lines().take(300).map(|l| format!("{l}\n")).collect::<String>()
+            + &format!("f {}\n", (1..=256).map(|k| k.to_string()).collect::<Vec<_>>().join(" "));
+        assert!(!matches!(read_obj(cut.as_bytes()), Err(ObjError::Syntax { .. })));
+    }
 
     #[test]
     fn reads_positions_polygons_and_slashed_corners() {
