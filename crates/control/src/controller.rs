@@ -1,7 +1,10 @@
 //! The compiled controller: names resolved to indices, parameters in one table, the runtime state of
 //! every machine and machine sensor, and the per-iteration step (spec §6.3–§6.9).
 
+use std::collections::{HashMap, HashSet};
 use std::ops::Range;
+
+use anima_format::limits::MAX_STATES;
 
 use serde::{Deserialize, Serialize};
 
@@ -357,33 +360,44 @@ impl Builder<'_> {
 struct Roles {
     actuators: Vec<(String, [usize; 2])>,
     args: Vec<(String, [String; 2])>,
+    /// Index in `actuators` (and in `args`) by role name, so that resolving a pose entry or a sensor's
+    /// arguments scans nothing.
+    actuator_roles: HashMap<String, usize>,
+    arg_roles: HashMap<String, usize>,
 }
 
 impl Roles {
     /// Checks and resolves machine `m`'s roles (none: no roles).
-    fn compile(md: &MachineDesc, actuators: &[String], m: usize) -> Result<Self, ControllerError> {
-        let mut roles = Roles { actuators: Vec::new(), args: Vec::new() };
+    fn compile(md: &MachineDesc, actuators: &Actuators, m: usize) -> Result<Self, ControllerError> {
+        let mut roles = Roles {
+            actuators: Vec::new(),
+            args: Vec::new(),
+            actuator_roles: HashMap::new(),
+            arg_roles: HashMap::new(),
+        };
         let Some(rd) = &md.roles else { return Ok(roles) };
         let at = |f: String| format!("machines[{m}].roles.{f}");
         for (i, (role, first, second)) in rd.actuators.iter().enumerate() {
             let path = at(format!("actuators[{i}]"));
-            if role.is_empty() || actuators.contains(role) {
+            if role.is_empty() || actuators.index.contains_key(role.as_str()) {
                 return Err(inv(
                     path,
                     format!("role `{role}` needs a name of its own (not empty, not one of the actuators)"),
                 ));
             }
-            if roles.actuators.iter().any(|(r, _)| r == role) {
+            if roles.actuator_roles.contains_key(role) {
                 return Err(inv(path, format!("a second role named `{role}`")));
             }
             let pair = [actuator_index(first, actuators, &path)?, actuator_index(second, actuators, &path)?];
+            roles.actuator_roles.insert(role.clone(), roles.actuators.len());
             roles.actuators.push((role.clone(), pair));
         }
         for (i, (role, first, second)) in rd.args.iter().enumerate() {
             let path = at(format!("args[{i}]"));
-            if role.is_empty() || roles.args.iter().any(|(r, _)| r == role) {
+            if role.is_empty() || roles.arg_roles.contains_key(role) {
                 return Err(inv(path, format!("argument role `{role}` is empty or named twice")));
             }
+            roles.arg_roles.insert(role.clone(), roles.args.len());
             roles.args.push((role.clone(), [first.clone(), second.clone()]));
         }
         Ok(roles)
@@ -394,12 +408,13 @@ impl Roles {
     fn actuator(
         &self,
         r: &ActuatorRef,
-        actuators: &[String],
+        actuators: &Actuators,
         path: &str,
     ) -> Result<([usize; 2], String), ControllerError> {
         if let ActuatorRef::Name(n) = r
-            && let Some((role, pair)) = self.actuators.iter().find(|(role, _)| role == n)
+            && let Some(&k) = self.actuator_roles.get(n)
         {
+            let (role, pair) = &self.actuators[k];
             return Ok((*pair, role.clone()));
         }
         let a = actuator_index(r, actuators, path).map_err(|e| {
@@ -410,13 +425,13 @@ impl Roles {
                 inv(path, format!("{}; the machine's roles: {}", e.message, list(&names)))
             }
         })?;
-        Ok(([a, a], actuators[a].clone()))
+        Ok(([a, a], actuators.names[a].clone()))
     }
 
     /// A sensor's arguments in phase `p`: each argument that names a role replaced by its argument.
     fn args(&self, args: &[String], p: usize) -> Vec<String> {
         args.iter()
-            .map(|a| self.args.iter().find(|(r, _)| r == a).map_or_else(|| a.clone(), |(_, v)| v[p].clone()))
+            .map(|a| self.arg_roles.get(a).map_or_else(|| a.clone(), |&k| self.args[k].1[p].clone()))
             .collect()
     }
 
@@ -442,24 +457,44 @@ impl Roles {
     }
 }
 
+/// The controller's actuators, with an index by name (the first of a name: a second one is an error
+/// found before any lookup), so that resolving a pose entry scans nothing.
+struct Actuators<'a> {
+    names: &'a [String],
+    index: HashMap<&'a str, usize>,
+}
+
+impl<'a> Actuators<'a> {
+    fn new(names: &'a [String]) -> Self {
+        let mut index = HashMap::with_capacity(names.len());
+        for (i, n) in names.iter().enumerate() {
+            index.entry(n.as_str()).or_insert(i);
+        }
+        Self { names, index }
+    }
+}
+
 /// An actuator by name or index.
-fn actuator_index(r: &ActuatorRef, actuators: &[String], path: &str) -> Result<usize, ControllerError> {
-    let n_act = actuators.len();
+fn actuator_index(r: &ActuatorRef, actuators: &Actuators, path: &str) -> Result<usize, ControllerError> {
+    let n_act = actuators.names.len();
     match r {
         ActuatorRef::Index(i) if *i < n_act => Ok(*i),
         ActuatorRef::Index(i) => Err(inv(
             path,
             format!("actuator index {i} is out of range (the controller has {n_act} actuators)"),
         )),
-        ActuatorRef::Name(n) => actuators.iter().position(|a| a == n).ok_or_else(|| {
-            inv(path, format!("unknown actuator `{n}`; the controller's actuators are: {}", list(actuators)))
+        ActuatorRef::Name(n) => actuators.index.get(n.as_str()).copied().ok_or_else(|| {
+            inv(
+                path,
+                format!("unknown actuator `{n}`; the controller's actuators are: {}", list(actuators.names)),
+            )
         }),
     }
 }
 
 /// What compiling one state's pose entries needs to know.
 struct PoseCtx<'a> {
-    actuators: &'a [String],
+    actuators: &'a Actuators<'a>,
     roles: &'a Roles,
     owner: ParamOwner,
     auto: bool,
@@ -581,9 +616,11 @@ fn list(names: &[String]) -> String {
     if names.is_empty() { "none".to_string() } else { names.join(", ") }
 }
 
+/// The first name that repeats an earlier one, with its index (one pass: a file of many states costs
+/// no quadratic scan).
 fn duplicate<'a>(names: impl Iterator<Item = &'a str>) -> Option<(usize, &'a str)> {
-    let names: Vec<&str> = names.collect();
-    (0..names.len()).find(|&i| names[..i].contains(&names[i])).map(|i| (i, names[i]))
+    let mut seen = HashSet::new();
+    names.enumerate().find(|&(_, n)| !seen.insert(n))
 }
 
 impl Controller {
@@ -608,6 +645,21 @@ impl Controller {
         if desc.machines.is_empty() {
             return Err(inv("machines", "a controller needs at least one machine"));
         }
+        // Counted before anything is built for them; every check below is linear in the file.
+        let mut n_states = 0usize;
+        for (m, md) in desc.machines.iter().enumerate() {
+            n_states = n_states.saturating_add(md.states.len());
+            if n_states > MAX_STATES {
+                let total = desc.machines.iter().fold(0usize, |n, md| n.saturating_add(md.states.len()));
+                return Err(inv(
+                    format!("machines[{m}].states"),
+                    format!(
+                        "expected at most {MAX_STATES} states in a controller (anima's limit), found {total}"
+                    ),
+                ));
+            }
+        }
+        let actuators = Actuators::new(&desc.actuators);
 
         // The sensor set first: machine sensors keep indices 0..k in `sensors`.
         let mut sensors = Vec::new();
@@ -616,6 +668,8 @@ impl Controller {
         if let Some((i, n)) = duplicate(desc.sensors.iter().map(|s| s.name.as_str())) {
             return Err(inv(format!("sensors[{i}].name"), format!("a second sensor named `{n}`")));
         }
+        let sensor_index: HashMap<&str, usize> =
+            desc.sensors.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect();
         for (k, s) in desc.sensors.iter().enumerate() {
             let at = |f: &str| format!("sensors[{k}].{f}");
             if s.kind.is_empty() {
@@ -657,7 +711,7 @@ impl Controller {
                 MachineKind::Constant => MachineType::Constant,
                 MachineKind::Default => MachineType::Default,
                 MachineKind::Sensory(name) => {
-                    let Some(k) = desc.sensors.iter().position(|s| s.name == *name) else {
+                    let Some(&k) = sensor_index.get(name.as_str()) else {
                         let names: Vec<String> = desc.sensors.iter().map(|s| s.name.clone()).collect();
                         return Err(inv(
                             at("kind"),
@@ -695,7 +749,7 @@ impl Controller {
 
             // Poses: states with their own pose first, then the shared ones; with roles, each pose
             // once per phase, over the same parameters.
-            let roles = Roles::compile(md, &desc.actuators, m)?;
+            let roles = Roles::compile(md, &actuators, m)?;
             let n_phases = if md.roles.is_some() { 2 } else { 1 };
             let mut poses: Vec<Vec<PoseItem>> = Vec::new();
             let mut pose_of = vec![[usize::MAX; 2]; md.states.len()];
@@ -710,7 +764,7 @@ impl Controller {
                     continue;
                 }
                 let ctx = PoseCtx {
-                    actuators: &desc.actuators,
+                    actuators: &actuators,
                     roles: &roles,
                     owner: ParamOwner::State { machine: m, state: s },
                     auto: md.auto && sd.auto,
@@ -718,12 +772,13 @@ impl Controller {
                 };
                 let mut items: [Vec<PoseItem>; 2] =
                     [Vec::with_capacity(sd.pose.len()), Vec::with_capacity(sd.pose.len())];
+                let mut posed: [HashSet<usize>; 2] = Default::default();
                 for (e, entry) in sd.pose.iter().enumerate() {
                     let path = at(&format!("states[{s}].pose[{e}]"));
                     let label_of = |name: &str| format!("{}/{}/{name}", md.name, sd.name);
                     let new = ctx.item(&mut b, &mut sensors, &mut feedback, entry, path, label_of)?;
                     for (p, item) in new.iter().enumerate().take(n_phases) {
-                        if items[p].iter().any(|it| it.actuator == item.actuator) {
+                        if !posed[p].insert(item.actuator) {
                             let phase = if p == 1 { " (with the roles swapped)" } else { "" };
                             return Err(inv(
                                 at(&format!("states[{s}].pose[{e}]")),
@@ -743,10 +798,12 @@ impl Controller {
                     poses.push(second);
                 }
             }
+            let state_index: HashMap<&str, usize> =
+                md.states.iter().enumerate().map(|(s, sd)| (sd.name.as_str(), s)).collect();
             for (s, sd) in md.states.iter().enumerate() {
                 let Some(other) = &sd.same_pose_as else { continue };
                 let path = at(&format!("states[{s}].same_pose_as"));
-                match md.states.iter().position(|o| o.name == *other) {
+                match state_index.get(other.as_str()).copied() {
                     None => {
                         return Err(inv(path, format!("unknown state `{other}` in machine `{}`", md.name)));
                     }
@@ -763,10 +820,11 @@ impl Controller {
             }
 
             let mut transitions = Vec::with_capacity(md.transitions.len());
+            let mut transition_names = HashSet::with_capacity(md.transitions.len());
             for (t, td) in md.transitions.iter().enumerate() {
                 let tat = |f: &str| at(&format!("transitions[{t}].{f}"));
                 let name = if td.name.is_empty() { format!("T{}", t + 1) } else { td.name.clone() };
-                if transitions.iter().any(|o: &TransitionDef| o.name == name) {
+                if !transition_names.insert(name.clone()) {
                     return Err(inv(tat("name"), format!("a second transition named `{name}`")));
                 }
                 if td.swap_roles && md.roles.is_none() {
@@ -833,7 +891,11 @@ impl Controller {
                 let next = (s + 1) % states.len();
                 let phase = usize::from(transitions[s].swap_roles);
                 let (p, q) = (&poses[states[s].pose[0]], &poses[states[next].pose[phase]]);
-                let same = p.len() == q.len() && p.iter().all(|a| q.iter().any(|b| b.actuator == a.actuator));
+                // A pose lists each actuator once, so equal lengths and p ⊆ q make equal sets.
+                let same = p.len() == q.len() && {
+                    let q: HashSet<usize> = q.iter().map(|b| b.actuator).collect();
+                    p.iter().all(|a| q.contains(&a.actuator))
+                };
                 if !same {
                     warnings.push(format!(
                         "machine `{}`: states `{}` and `{}` pose different actuator sets; actuators only in \
@@ -855,8 +917,15 @@ impl Controller {
                 rt: MachineRt { prev: Vec::with_capacity(max_pose), ..MachineRt::default() },
             });
         }
+        let bound: HashSet<usize> = machines
+            .iter()
+            .filter_map(|m| match m.kind {
+                MachineType::Sensory(k) => Some(k),
+                _ => None,
+            })
+            .collect();
         for (k, _) in desc.sensors.iter().enumerate() {
-            if !machines.iter().any(|m| m.kind == MachineType::Sensory(k)) {
+            if !bound.contains(&k) {
                 warnings.push(format!(
                     "sensor `{}` drives no sensory machine; it does not suppress default machines (Fig. 5.3)",
                     desc.sensors[k].name

@@ -333,3 +333,55 @@ fn the_example_in_the_docs_parses() {
     let c = Controller::from_ron(example, &procedures()).unwrap_or_else(|e| panic!("docs/control.md: {e}"));
     assert_eq!(c.free_params(&Selection::all()).len(), 2, "T1's time and the sensor tolerance");
 }
+
+/// A machine `name` of `states` states named `E0…`, each posing actuator `a` and left after 20
+/// iterations, one a line after the machine's first two lines.
+fn machine(name: &str, states: usize) -> String {
+    let mut text = format!("        Machine(name: \"{name}\", kind: Constant,\n            states: [\n");
+    for s in 0..states {
+        text.push_str(&format!("                State(name: \"E{s}\", pose: [(\"a\", Angle(0.1))]),\n"));
+    }
+    text.push_str("            ],\n            transitions: [\n");
+    for _ in 0..states {
+        text.push_str("                Transition(when: Temporal(20)),\n");
+    }
+    text.push_str("            ],\n        ),\n");
+    text
+}
+
+/// A controller of these machines over the one actuator `a`; the first machine starts on line 5.
+fn controller(machines: &[String]) -> String {
+    format!(
+        "Controller(\n    name: \"big\",\n    actuators: [\"a\"],\n    machines: [\n{}    ],\n)\n",
+        machines.concat()
+    )
+}
+
+/// More states than anima's limit are refused at the `states` field of the machine that passes it,
+/// before anything is built for them; at the limit the checks are linear (issue #40: 100 000 states
+/// took 27.7 s).
+#[test]
+fn states_above_the_limit_are_refused_and_checks_are_linear() {
+    use anima_format::limits::MAX_STATES;
+    let e = error(&controller(&[machine("M", MAX_STATES + 1)]));
+    check(&e, ControllerErrorKind::Invalid, "machines[0].states", 6, 13, "at most 10000 states");
+    // The count is the controller's, over its machines.
+    let half = MAX_STATES / 2;
+    let e = error(&controller(&[machine("M", half), machine("N", 1), machine("O", half)]));
+    assert_eq!(e.field, "machines[2].states", "{e}");
+    assert!(e.message.contains(&format!("found {}", 2 * half + 1)), "{e}");
+
+    let start = std::time::Instant::now();
+    let text = controller(&[machine("M", MAX_STATES)]);
+    let c = Controller::from_ron(&text, &procedures()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(c.machines()[0].n_states(), MAX_STATES);
+    // A duplicate at the end is still found, at its line.
+    let last = MAX_STATES - 1;
+    let e = error(&text.replace(&format!("\"E{last}\""), "\"E0\""));
+    let field = format!("machines[0].states[{last}].name");
+    check(&e, ControllerErrorKind::Invalid, &field, 7 + last, 23, "a second state named `E0`");
+    let took = start.elapsed();
+    // Quadratic checks took seconds for 10 000 states; linear ones take milliseconds (a generous
+    // bound for a debug build on a busy machine).
+    assert!(took.as_secs_f64() < 10.0, "{took:?}");
+}
