@@ -5,6 +5,9 @@
 //! y up, all centres at z = 0 (Nunes 2006 Table 6.1); a world places the model by a translation. Joint
 //! angles are zero in that configuration (§3.3 of the spec).
 
+use std::collections::HashMap;
+
+use anima_format::limits::MAX_BODIES;
 use serde::{Deserialize, Serialize};
 
 use crate::error::SkeletonError;
@@ -360,15 +363,27 @@ impl Skeleton {
         if desc.bodies.is_empty() {
             return Err(err("bodies", "a skeleton needs at least one body"));
         }
+        // Counted before anything is built for them; every check below is linear in the file.
+        for (field, n) in
+            [("bodies", desc.bodies.len()), ("joints", desc.joints.len()), ("welds", desc.welds.len())]
+        {
+            if n > MAX_BODIES {
+                return Err(err(
+                    field,
+                    format!("expected at most {MAX_BODIES} {field} in a skeleton (anima's limit), found {n}"),
+                ));
+            }
+        }
 
         // Bodies.
         let n_bodies = desc.bodies.len();
+        let mut body_index: HashMap<&str, usize> = HashMap::with_capacity(n_bodies);
         for (i, b) in desc.bodies.iter().enumerate() {
             let at = |f: &str| format!("bodies[{i}].{f}");
             if b.name.is_empty() {
                 return Err(err(at("name"), "empty name"));
             }
-            if desc.bodies[..i].iter().any(|o| o.name == b.name) {
+            if body_index.insert(&b.name, i).is_some() {
                 return Err(err(at("name"), format!("a second body named `{}`", b.name)));
             }
             check_positive(&at("mass"), b.mass)?;
@@ -383,21 +398,19 @@ impl Skeleton {
             }
         }
         let body = |field: String, name: &str| -> Result<usize, SkeletonError> {
-            desc.bodies
-                .iter()
-                .position(|b| b.name == name)
-                .ok_or_else(|| err(field, format!("no body named `{name}`")))
+            body_index.get(name).copied().ok_or_else(|| err(field, format!("no body named `{name}`")))
         };
 
         // Joints: a forest.
         let mut parent_joint: Vec<Option<usize>> = vec![None; n_bodies];
         let mut joint_bodies = Vec::with_capacity(desc.joints.len());
+        let mut joint_index: HashMap<&str, usize> = HashMap::with_capacity(desc.joints.len());
         for (j, joint) in desc.joints.iter().enumerate() {
             let at = |f: &str| format!("joints[{j}].{f}");
             if joint.name.is_empty() {
                 return Err(err(at("name"), "empty name"));
             }
-            if desc.joints[..j].iter().any(|o| o.name == joint.name) {
+            if joint_index.insert(&joint.name, j).is_some() {
                 return Err(err(at("name"), format!("a second joint named `{}`", joint.name)));
             }
             let p = body(at("parent"), &joint.parent)?;
@@ -450,24 +463,26 @@ impl Skeleton {
                 ));
             }
         }
+        // Breadth first from the roots, each body's children in joint order.
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); n_bodies];
+        for &(jp, jc) in &joint_bodies {
+            children[jp].push(jc);
+        }
         let mut tree_order = roots.clone();
         let mut k = 0;
         while k < tree_order.len() {
             let p = tree_order[k];
-            for &(jp, jc) in &joint_bodies {
-                if jp == p {
-                    tree_order.push(jc);
-                }
-            }
+            tree_order.extend_from_slice(&children[p]);
             k += 1;
         }
         debug_assert_eq!(tree_order.len(), n_bodies);
 
         // Welds.
         let mut weld_bodies = Vec::with_capacity(desc.welds.len());
+        let mut weld_names = HashMap::with_capacity(desc.welds.len());
         for (w, weld) in desc.welds.iter().enumerate() {
             let at = |f: &str| format!("welds[{w}].{f}");
-            if desc.welds[..w].iter().any(|o| o.name == weld.name) {
+            if weld_names.insert(weld.name.as_str(), w).is_some() {
                 return Err(err(at("name"), format!("a second weld named `{}`", weld.name)));
             }
             let a = body(at("a"), &weld.a)?;
@@ -483,9 +498,12 @@ impl Skeleton {
         // Actuators.
         let g = a.gain_scale;
         let mut actuators = Vec::with_capacity(desc.actuators.len());
+        let mut actuator_names = HashMap::with_capacity(desc.actuators.len());
+        // The actuator holding each number 1..=len (checked in range before it is used).
+        let mut numbered: Vec<Option<usize>> = vec![None; desc.actuators.len()];
         for (i, act) in desc.actuators.iter().enumerate() {
             let at = |f: &str| format!("actuators[{i}].{f}");
-            if desc.actuators[..i].iter().any(|o| o.name == act.name) {
+            if actuator_names.insert(act.name.as_str(), i).is_some() {
                 return Err(err(at("name"), format!("a second actuator named `{}`", act.name)));
             }
             if act.number == 0 || act.number as usize > desc.actuators.len() {
@@ -494,14 +512,17 @@ impl Skeleton {
                     format!("expected a number in 1..={}, found {}", desc.actuators.len(), act.number),
                 ));
             }
-            if let Some(o) = desc.actuators[..i].iter().find(|o| o.number == act.number) {
-                return Err(err(at("number"), format!("number {} is also `{}`'s", act.number, o.name)));
+            let slot = &mut numbered[act.number as usize - 1];
+            if let Some(o) = *slot {
+                let other = &desc.actuators[o].name;
+                return Err(err(at("number"), format!("number {} is also `{other}`'s", act.number)));
             }
+            *slot = Some(i);
             let drive = match &act.drives {
                 Drive::Joint(name) => DriveSpec::Joint(
-                    desc.joints
-                        .iter()
-                        .position(|j| &j.name == name)
+                    joint_index
+                        .get(name.as_str())
+                        .copied()
                         .ok_or_else(|| err(at("drives"), format!("no joint named `{name}`")))?,
                 ),
                 Drive::BodyPair { a: na, b: nb } => {

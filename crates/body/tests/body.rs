@@ -779,3 +779,69 @@ fn the_sensors_read_the_inclination_of_the_ground_under_the_centre_of_mass() {
         assert_eq!(s.ground_slope, expected, "{relief:?}");
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Limits
+
+/// A chain of `bodies` bodies `b0…` (one a line after the `bodies: [` line, 2), jointed in order by
+/// `joints` hinges `j1…` listed from the chain's end, with an actuator on each.
+fn chain(bodies: usize, joints: usize) -> String {
+    let mut text = String::from("Skeleton(name: \"chain\", depth: 0.1,\n  bodies: [\n");
+    for i in 0..bodies {
+        text.push_str(&format!(
+            "    Body(name: \"b{i}\", shape: Box(width: 0.1, height: 0.1), mass: 1.0, centre: (0.0, {i}.0)),\n"
+        ));
+    }
+    text.push_str("  ],\n  joints: [\n");
+    for j in (1..=joints).rev() {
+        let (p, c) = (j - 1, j);
+        text.push_str(&format!(
+            "    Joint(name: \"j{j}\", kind: Hinge, parent: \"b{p}\", child: \"b{c}\", anchor: (0.0, {j}.0)),\n"
+        ));
+    }
+    text.push_str("  ],\n  actuators: [\n");
+    for j in 1..=joints {
+        text.push_str(&format!(
+            "    Actuator(name: \"a{j}\", number: {j}, drives: Joint(\"j{j}\"), kp: 1.0, kd: 0.1),\n"
+        ));
+    }
+    text.push_str(
+        "  ],\n  actuation: Actuation(mode: Explicit, gain_scale: 1.0, torque_limit_rad: 1.0, brake_rad_s: 0.0),\n)\n",
+    );
+    text
+}
+
+/// More bodies or joints than anima's limit are refused at their list's line before anything is built
+/// for them; at the limit the checks are linear (issue #40).
+#[test]
+fn bodies_and_joints_above_the_limit_are_refused_and_checks_are_linear() {
+    use anima_format::limits::MAX_BODIES;
+    let e = Skeleton::from_ron_str(&chain(MAX_BODIES + 1, 1)).unwrap_err();
+    assert_eq!((e.kind, e.field.as_str(), e.line), (SkeletonErrorKind::Invalid, "bodies", Some(2)), "{e}");
+    assert!(e.message.contains("at most 1000 bodies"), "{e}");
+    let text = chain(MAX_BODIES, MAX_BODIES + 1);
+    let e = Skeleton::from_ron_str(&text).unwrap_err();
+    assert_eq!((e.field.as_str(), e.line), ("joints", Some(line_of(&text, "joints: ["))), "{e}");
+    assert!(e.message.contains("at most 1000 joints"), "{e}");
+
+    let start = std::time::Instant::now();
+    let text = chain(MAX_BODIES, MAX_BODIES - 1);
+    let sk = Skeleton::from_ron_str(&text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        (sk.n_bodies(), sk.n_joints(), sk.n_actuators()),
+        (MAX_BODIES, MAX_BODIES - 1, MAX_BODIES - 1)
+    );
+    // Breadth first from the root, though the joints are listed from the chain's end.
+    assert!(sk.tree_order().iter().copied().eq(0..MAX_BODIES));
+    assert_eq!(sk.actuator_index("a999"), Some(MAX_BODIES - 2));
+    // A duplicate at the end is still found, at its line.
+    let last = MAX_BODIES - 1;
+    let bad = replace_once(&text, &format!("name: \"b{last}\""), "name: \"b0\"");
+    let e = Skeleton::from_ron_str(&bad).unwrap_err();
+    assert_eq!((e.field.as_str(), e.line), (format!("bodies[{last}].name").as_str(), Some(3 + last)), "{e}");
+    let bad = replace_once(&text, &format!("number: {last}"), "number: 1");
+    let e = Skeleton::from_ron_str(&bad).unwrap_err();
+    assert!(e.field == format!("actuators[{}].number", last - 1) && e.message.contains("also `a1`'s"), "{e}");
+    let took = start.elapsed();
+    assert!(took.as_secs_f64() < 10.0, "{took:?}");
+}
