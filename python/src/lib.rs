@@ -400,7 +400,8 @@ fn load(py: Python<'_>, path: PathBuf, gravity: Option<[f64; 3]>) -> PyResult<Py
 
 /// Runs a scene file to its end as `anima run` does and returns its summary as JSON text (the Python
 /// wrapper `anima.run` returns it as a dict). With `out`, frames, pictures and `summary.json` go there,
-/// and with `export = "gltf"` the run as an animated glTF, `animation.glb`.
+/// and with `export = "gltf"` the run as an animated glTF, `animation.glb` (`"usd"`: a USD stage,
+/// `animation.usda`).
 #[pyfunction]
 #[pyo3(signature = (path, out = None, integrator = None, dt = None, duration = None, export = None))]
 fn run_json(
@@ -415,7 +416,10 @@ fn run_json(
     let export = match export {
         None => None,
         Some("gltf") => Some(anima_run::run::export::Export::Gltf),
-        Some(other) => return Err(value_error(format!("expected the export `gltf`, found `{other}`"))),
+        Some("usd") => Some(anima_run::run::export::Export::Usd),
+        Some(other) => {
+            return Err(value_error(format!("expected the export `gltf` or `usd`, found `{other}`")));
+        }
     };
     if export.is_some() && out.is_none() {
         return Err(value_error("export needs an `out` folder to write the animation to"));

@@ -150,6 +150,9 @@ enum ExportArg {
     /// Animated glTF 2.0 (OUT/animation.glb): cloth as morph targets (a mesh per frame when
     /// remeshed) over the static objects, figures as node hierarchies; metres, y up.
     Gltf,
+    /// An animated USD stage in text form (OUT/animation.usda): time-sampled points (and topology when
+    /// remeshed), figures' links as time-sampled transforms; metres, y up, a time code per millisecond.
+    Usd,
 }
 
 /// FLEX3D's friction reading (spec S7.2).
@@ -395,6 +398,7 @@ impl RunArgs {
             reference,
             export: self.export.map(|e| match e {
                 ExportArg::Gltf => Export::Gltf,
+                ExportArg::Usd => Export::Usd,
             }),
             parallel: !self.one_thread,
         })

@@ -45,6 +45,10 @@ pub enum VizError {
     /// Writing the GLB file failed.
     #[error("glTF export: writing failed: {0}")]
     GltfWrite(#[source] std::io::Error),
+
+    /// Writing the USD stage failed.
+    #[error("USD export: writing failed: {0}")]
+    UsdWrite(#[source] std::io::Error),
 }
 
 /// Converts a plotters error into [`VizError::Draw`]; plotters' error types borrow the backend's error

@@ -60,7 +60,8 @@ def run(
     """Runs a scene file to its end, as ``anima run`` does, and returns its summary.
 
     With ``out``, the frames, pictures and ``summary.json`` are written there, and with
-    ``export="gltf"`` the whole run as an animated glTF 2.0 file, ``animation.glb``. ``integrator``, ``dt``
+    ``export="gltf"`` the whole run as an animated glTF 2.0 file, ``animation.glb`` (``export="usd"``: an
+    animated USD stage, ``animation.usda``). ``integrator``, ``dt``
     and ``duration`` override the scene's, as the command's options do. A character scene's summary
     holds its evaluation (a walk's distance, a throw's landing point, a backflip's outcome).
     """

@@ -312,7 +312,7 @@ fn run_figures<F: Figures>(
         picture(world, 0, &mut frames)?;
     }
     // The export's frames are the pictures' frames: the start, then every `frame_every` steps.
-    let mut export = match opts.gltf_dir() {
+    let mut export = match opts.export_dir() {
         Some(_) => {
             let mut e = GltfExport::figures(world, (n_steps / frame_every) as usize)?;
             e.figure_frame(0, world)?;

@@ -33,10 +33,26 @@ use crate::output::write_atomic;
 pub enum Export {
     /// Animated glTF 2.0, `animation.glb` in the output folder.
     Gltf,
+    /// An animated USD stage in text form, `animation.usda` in the output folder (film and VFX
+    /// pipelines; a remeshed cloth keeps its changing topology; `anima_viz::gltf::usd`).
+    Usd,
 }
 
-/// The file an export writes in the output folder.
+impl Export {
+    /// The file the export writes in the output folder.
+    pub fn file(self) -> &'static str {
+        match self {
+            Export::Gltf => GLTF_FILE,
+            Export::Usd => USD_FILE,
+        }
+    }
+}
+
+/// The file a glTF export writes in the output folder.
 pub const GLTF_FILE: &str = "animation.glb";
+
+/// The file a USD export writes in the output folder.
+pub const USD_FILE: &str = "animation.usda";
 
 /// The most keyframes an export keeps: the morph weights track grows as their square (4 MB here).
 pub const MAX_KEYFRAMES: usize = 1000;
@@ -232,20 +248,24 @@ impl GltfExport {
         a.figures.iter_mut().for_each(|f| (n..f.n_frames()).for_each(|_| f.pop_frame()));
     }
 
-    /// Writes `dir/animation.glb` (whole: a temporary file renamed into place); returns what the
-    /// summary should warn about (thinned frames, an export that ended early).
-    pub fn write(mut self, dir: &Path) -> Result<Vec<String>> {
+    /// Writes `dir/animation.glb` or `dir/animation.usda` (whole: a temporary file renamed into place);
+    /// returns what the summary should warn about (thinned frames, an export that ended early).
+    pub fn write(mut self, dir: &Path, format: Export) -> Result<Vec<String>> {
         if let Some(height) = self.ground {
             let (x0, x1) = if self.x_range.0 <= self.x_range.1 { self.x_range } else { (0.0, 0.0) };
             let ground =
                 box_mesh(DVec3::new(x0 - 1.5, height - 0.05, -1.0), DVec3::new(x1 + 1.5, height, 1.0));
             self.animation.statics.push(StaticMesh::new("ground", ground, GROUND_COLOUR));
         }
-        write_atomic(&dir.join(GLTF_FILE), |w| Ok(self.animation.write_glb(w)?))?;
+        let file = format.file();
+        match format {
+            Export::Gltf => write_atomic(&dir.join(file), |w| Ok(self.animation.write_glb(w)?))?,
+            Export::Usd => write_atomic(&dir.join(file), |w| Ok(self.animation.write_usda(w)?))?,
+        }
         let mut warnings = Vec::new();
         if self.stride > 1 {
             warnings.push(format!(
-                "{GLTF_FILE} keeps one frame in {} and the last ({} keyframes; an export keeps at most \
+                "{file} keeps one frame in {} and the last ({} keyframes; an export keeps at most \
                  {MAX_KEYFRAMES} keyframes and {MAX_VERTEX_FRAMES} vertex positions in all)",
                 self.stride, self.n_kept
             ));

@@ -120,7 +120,7 @@ pub fn run(
         write_frame(opts, &world, 0)?;
     }
     // FLEX3D scenes have y up, as glTF does; the export starts from the state at t = 0.
-    let mut export = match opts.gltf_dir() {
+    let mut export = match opts.export_dir() {
         Some(_) => {
             let surfaces: Vec<(&str, usize, &[[u32; 3]])> = world
                 .surfaces()

@@ -96,9 +96,9 @@ impl RunOptions {
         self.out_dir.as_deref().filter(|_| self.pictures)
     }
 
-    /// The folder `animation.glb` goes to, when the run is exported as glTF.
-    fn gltf_dir(&self) -> Option<&Path> {
-        self.out_dir.as_deref().filter(|_| self.export == Some(Export::Gltf))
+    /// The folder the animation (`animation.glb` or `animation.usda`) goes to, when the run is exported.
+    fn export_dir(&self) -> Option<&Path> {
+        self.out_dir.as_deref().filter(|_| self.export.is_some())
     }
 }
 
@@ -177,7 +177,7 @@ pub struct Summary {
     pub detail: Detail,
 }
 
-/// The warnings a run gives at its end: the glTF export's, written now, and the crossing watch's (when
+/// The warnings a run gives at its end: the export's, written now, and the crossing watch's (when
 /// it watched), each shown on `progress` and kept for the summary.
 pub(crate) fn closing_warnings(
     export: Option<export::GltfExport>,
@@ -186,8 +186,8 @@ pub(crate) fn closing_warnings(
     progress: &mut dyn Progress,
     warnings: &mut Vec<String>,
 ) -> Result<()> {
-    let written = match (export, opts.gltf_dir()) {
-        (Some(e), Some(dir)) => e.write(dir)?,
+    let written = match (export, opts.export_dir(), opts.export) {
+        (Some(e), Some(dir), Some(format)) => e.write(dir, format)?,
         _ => Vec::new(),
     };
     for w in written.into_iter().chain(watch.and_then(CrossingWatch::warning)) {
@@ -319,7 +319,7 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
                 Scene::Oliveira(_) => frame(name, "cloth_", ".obj"),
                 Scene::Body(_) | Scene::Character(_) => frame(name, "frame_", ".png"),
             };
-            frame_file || name == export::GLTF_FILE
+            frame_file || name == export::GLTF_FILE || name == export::USD_FILE
         };
         let removed = crate::output::remove_stale(dir, ours)?;
         if removed > 0 {

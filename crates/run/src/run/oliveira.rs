@@ -76,7 +76,7 @@ pub fn run(
     if opts.frame0 {
         write_frame(opts, &cloth, 0)?;
     }
-    let mut export = match opts.gltf_dir() {
+    let mut export = match opts.export_dir() {
         Some(_) => Some(gltf_export(loaded, &cloth, n_frames)?),
         None => None,
     };

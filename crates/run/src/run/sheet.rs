@@ -110,7 +110,7 @@ pub fn run(
     let mut snapshots: Vec<(usize, f64, Vec<DVec3>)> = Vec::new();
     let shown = sheet_frames(n_frames);
     // The sheet's up is against its gravity (z up in the standard sheets).
-    let mut export = match opts.gltf_dir() {
+    let mut export = match opts.export_dir() {
         Some(_) => {
             let up = UpAxis::against(scene.sheet.gravity, UpAxis::PlusZ);
             let mut e = GltfExport::cloth(up, &[], &[("sheet", n, &triangles)], n_frames)?;

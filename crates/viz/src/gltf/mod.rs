@@ -1,5 +1,6 @@
 //! Animated glTF 2.0 export: what a run did, as one binary `.glb` file that any glTF viewer (Blender,
-//! three.js, the Khronos sample viewer) plays back.
+//! three.js, the Khronos sample viewer) plays back; the same [`Animation`] also as a USD stage
+//! ([`usd`]) for film pipelines.
 //!
 //! The input is plain data and knows no scene: an [`Animation`] holds
 //! - [`StaticMesh`]es: objects that do not move (a table, the Bunny, the ground);
@@ -69,6 +70,7 @@
 //! assert_eq!(&glb[..4], b"glTF");
 //! ```
 
+pub mod usd;
 mod write;
 
 use anima_geom::{DVec3, TriangleMesh};
