@@ -15,7 +15,7 @@ use anima_geom::DVec3;
 use anima_ode::Integrator;
 use anima_run::run::{Overrides, RunOptions, Silent, SolveOptions};
 use anima_run::sim::{ClothSim, FigureSim};
-use anima_scene::optimisation::ObjectiveSpec;
+use anima_scene::optimisation::{LoadedOptimisation, ObjectiveSpec};
 use anima_scene::sheet::SheetScene;
 use anima_scene::{LoadOptions, Scene};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
@@ -517,6 +517,8 @@ impl Evaluator {
 #[pyclass(module = "anima._anima", unsendable)]
 pub struct Optimisation {
     opt: Box<dyn Optimiser + Send>,
+    /// The spec, to build a fresh optimiser when a log does not replay.
+    loaded: LoadedOptimisation,
     evaluator: Evaluator,
     log: RunLog,
     /// The generation asked and not yet told: its stage and candidates.
@@ -545,6 +547,7 @@ impl Optimisation {
         let space = loaded.controller.space(&ids);
         Ok(Self {
             opt,
+            loaded: loaded.clone(),
             names: space.dims.iter().map(|d| d.name.clone()).collect(),
             evaluator: Evaluator {
                 objective: loaded.spec.objective,
@@ -599,19 +602,27 @@ impl Optimisation {
         Ok(Some(PyArray1::from_vec(py, flat).reshape([candidates.len(), d])?))
     }
 
-    /// The fitnesses of the generation just asked, in candidate order.
+    /// The fitnesses of the generation just asked, in candidate order: finite numbers (a failed
+    /// evaluation is a value, such as 0, never NaN). A wrong count or a non-finite fitness raises
+    /// ValueError and leaves the generation to tell.
     fn tell(&mut self, fitness: Vec<f64>) -> PyResult<()> {
-        let Some((stage, candidates)) = self.pending.take() else {
+        let Some((_, candidates)) = &self.pending else {
             return Err(PyRuntimeError::new_err("tell() without a generation asked"));
         };
         if fitness.len() != candidates.len() {
-            let n = candidates.len();
-            self.pending = Some((stage, candidates));
             return Err(value_error(format!(
-                "expected {n} fitnesses, one per candidate, found {}",
+                "expected {} fitnesses, one per candidate, found {}",
+                candidates.len(),
                 fitness.len()
             )));
         }
+        if let Some(k) = fitness.iter().position(|f| !f.is_finite()) {
+            return Err(value_error(format!(
+                "fitness {k} is {}: expected a finite number (a failed evaluation is a value, such as 0)",
+                fitness[k]
+            )));
+        }
+        let (stage, candidates) = self.pending.take().expect("checked above");
         let accepted = self.opt.tell(&candidates, &fitness);
         let generation = self.log.generations;
         for ((x, f), a) in candidates.into_iter().zip(fitness).zip(accepted) {
@@ -646,8 +657,9 @@ impl Optimisation {
         let (opt, log, e) = (&mut self.opt, &mut self.log, &self.evaluator);
         py.detach(|| {
             let objective = |x: &[f64]| anima_run::optimise::fitness(&e.objective, &e.controller, &e.ids, x);
-            run(opt.as_mut(), &objective, budget, log);
-        });
+            run(opt.as_mut(), &objective, budget, log)
+        })
+        .map_err(value_error)?;
         Ok(())
     }
 
@@ -671,7 +683,8 @@ impl Optimisation {
     }
 
     /// Replays a log written by `save_log` (or `anima optimise`) of a run of this spec, so that the
-    /// optimisation goes on where it stopped. Only a fresh optimisation resumes.
+    /// optimisation goes on where it stopped. Only a fresh optimisation resumes; a log that does not
+    /// replay raises ValueError and leaves it fresh.
     fn resume(&mut self, path: PathBuf) -> PyResult<()> {
         if !self.log.is_empty() || self.pending.is_some() {
             return Err(PyRuntimeError::new_err("resume() on an optimisation that has already begun"));
@@ -680,7 +693,12 @@ impl Optimisation {
             std::fs::read_to_string(&path).map_err(|e| scene_error(format!("{}: {e}", path.display())))?;
         let log: RunLog =
             ron::from_str(&text).map_err(|e| scene_error(format!("{}: {e}", path.display())))?;
-        resume(self.opt.as_mut(), &log).map_err(|e| value_error(format!("{}: {e}", path.display())))?;
+        if let Err(e) = resume(self.opt.as_mut(), &log) {
+            // The replay may have told the optimiser part of the log: start it afresh.
+            self.opt =
+                anima_run::optimise::optimiser(&self.loaded, &self.evaluator.ids).map_err(value_error)?;
+            return Err(value_error(format!("{}: {e}", path.display())));
+        }
         self.log = log;
         Ok(())
     }

@@ -1,6 +1,7 @@
 """Optimisations driven by ask/tell from Python equal the optimiser's own run, and resume from logs."""
 
 import pickle
+import re
 
 import numpy as np
 
@@ -60,3 +61,42 @@ def test_telling_the_wrong_number_of_fitnesses_is_refused(assets):
         raise AssertionError("tell accepted 2 fitnesses for 8 candidates")
     opt.tell([1.0] * 8)  # the generation is still there to tell
     assert opt.evaluations == 8
+
+
+def test_telling_a_fitness_that_is_not_finite_is_refused(assets):
+    opt = anima.Optimisation(spec(assets))
+    opt.ask()
+    for bad in (float("nan"), float("inf"), float("-inf")):
+        try:
+            opt.tell([bad] * 8)
+        except ValueError as e:
+            assert "finite" in str(e)
+        else:
+            raise AssertionError(f"tell accepted {bad} fitnesses")
+    opt.tell([1.0] * 8)  # the generation is still there to tell
+    assert opt.evaluations == 8
+
+
+def test_a_log_that_fails_to_replay_leaves_the_optimisation_fresh(assets, tmp_path):
+    # Two generations told by hand (no walks), then the second one's first point edited: the replay
+    # tells the first generation before it finds the difference.
+    first = anima.Optimisation(spec(assets))
+    for f in (1.0, 2.0):
+        first.ask()
+        first.tell([f] * 8)
+    text = first.log_ron()
+    second = r"(generation: 1,\s*stage: \d+,\s*x: \[\s*)[-+0-9.eE]+"
+    edited = re.sub(second, r"\g<1>0.123456789", text, count=1)
+    assert edited != text
+    log = tmp_path / "edited.log.ron"
+    log.write_text(edited)
+    resumed = anima.Optimisation(spec(assets))
+    try:
+        resumed.resume(log)
+    except ValueError as e:
+        assert "evaluation 8" in str(e)
+    else:
+        raise AssertionError("an edited log was resumed")
+    assert resumed.evaluations == 0
+    fresh = anima.Optimisation(spec(assets))
+    assert np.array_equal(resumed.ask(), fresh.ask())

@@ -105,7 +105,7 @@ fn main() {
             };
             let mut opt = anima_lab::optimise::optimiser(&loaded, &ids).expect("optimiser");
             let mut log = RunLog::default();
-            run(opt.as_mut(), &fit, 46, &mut log);
+            run(opt.as_mut(), &fit, 46, &mut log).expect("a finite fitness");
             let before = log.evaluations[0].fitness;
             let best = log.best().expect("evaluated").clone();
             let mut c = controller.clone();

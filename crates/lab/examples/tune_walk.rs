@@ -72,7 +72,7 @@ fn main() {
     let mut best = f64::NEG_INFINITY;
     while log.len() < budget {
         let n = log.len() + 10;
-        let r = run(&mut opt, &objective, n, &mut log);
+        let r = run(&mut opt, &objective, n, &mut log).expect("a finite fitness");
         if let Some((x, f)) = r
             && f > best
         {

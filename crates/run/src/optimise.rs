@@ -17,7 +17,8 @@ use crate::objectives;
 use crate::output::write_atomic;
 use crate::run::Progress;
 
-/// The fitness of the spec's objective for `controller` with its parameters `ids` set to `x`.
+/// The fitness of the spec's objective for `controller` with its parameters `ids` set to `x`: always
+/// a finite number, a failed evaluation (a fall, a diverging simulation) scoring 0.
 pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamId], x: &[f64]) -> f64 {
     let mut c = controller.clone();
     c.apply(ids, x);
@@ -65,30 +66,37 @@ pub fn optimiser(loaded: &LoadedOptimisation, ids: &[ParamId]) -> Result<Box<dyn
     })
 }
 
-/// Runs `opt` to `budget` evaluations, one generation at a time, the log written (whole) to `log_path`
-/// after each; an earlier log of the same run there is replayed first and the run goes on from it.
+/// Runs the optimiser `build` makes to `budget` evaluations, one generation at a time, the log
+/// written (whole) to `log_path` after each; an earlier log of the same run there is replayed first
+/// and the run goes on from it. When that log does not replay, the optimiser it was replayed into is
+/// dropped and the run starts over from a freshly built one, as a run without the log would.
 /// `report` sees the log after every generation.
 pub fn optimise_logged<O: Optimiser + ?Sized>(
-    opt: &mut O,
+    mut build: impl FnMut() -> Result<Box<O>>,
     objective: &(impl Objective + ?Sized),
     budget: usize,
     log_path: &Path,
     mut report: impl FnMut(&RunLog, Resumed),
 ) -> Result<RunLog> {
     let mut log = RunLog::default();
+    let mut opt = build()?;
     if let Ok(text) = std::fs::read_to_string(log_path) {
         let old: RunLog = ron::from_str(&text).with_context(|| format!("reading {}", log_path.display()))?;
-        match resume(opt, &old) {
+        match resume(opt.as_mut(), &old) {
             Ok(()) => {
                 report(&old, Resumed::From(old.len()));
                 log = old;
             }
-            Err(e) => report(&log, Resumed::Refused(e.to_string())),
+            Err(e) => {
+                // The replay may have told `opt` part of the log (see `resume`).
+                opt = build()?;
+                report(&log, Resumed::Refused(e.to_string()));
+            }
         }
     }
     while log.len() < budget {
         let before = log.len();
-        run(opt, objective, before + 1, &mut log);
+        run(opt.as_mut(), objective, before + 1, &mut log)?;
         if log.len() == before {
             break;
         }
@@ -149,7 +157,6 @@ pub fn optimise(
             "the selection names no free parameter of the controller (a free parameter is written with an interval)"
         );
     }
-    let mut opt = optimiser(loaded, &ids)?;
     let budget = opts.evaluations.unwrap_or(spec.evaluations);
     let log_path = opts.out_dir.join(format!("{}.log.ron", spec.name));
     if opts.fresh && log_path.exists() {
@@ -158,7 +165,8 @@ pub fn optimise(
     let objective = |x: &[f64]| fitness(&spec.objective, &loaded.controller, &ids, x);
     let mut resumed = 0;
     progress.begin(budget as u64);
-    let log = optimise_logged(opt.as_mut(), &objective, budget, &log_path, |log, r| {
+    let build = || optimiser(loaded, &ids);
+    let log = optimise_logged(build, &objective, budget, &log_path, |log, r| {
         match r {
             Resumed::From(n) => resumed = n,
             Resumed::Refused(why) => {
@@ -192,4 +200,69 @@ pub fn optimise(
         log_path,
         controller_path,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use anima_control::optimise::{Space, Stage};
+
+    use super::*;
+
+    fn sphere(x: &[f64]) -> f64 {
+        -x.iter().map(|v| (v - 0.3) * (v - 0.3)).sum::<f64>()
+    }
+
+    /// CMA-ES and the greedy search over a small box.
+    fn build(kind: usize) -> Result<Box<dyn Optimiser + Send>> {
+        let space = Space::cube(3, -1.0, 1.0);
+        Ok(match kind {
+            0 => Box::new(Cmaes::new(space, CmaesConfig::new(vec![0.5; 3], 0.3), 11)?),
+            _ => {
+                let stages = vec![Stage::global("g", vec![0, 1, 2], 10), Stage::global("h", vec![0, 1], 10)];
+                Box::new(GreedySearch::new(space, stages, vec![0.5; 3], 11)?)
+            }
+        })
+    }
+
+    /// A log whose replay fails after its first generation is refused, and the run that follows equals
+    /// a fresh one: the optimiser the log was replayed into is rebuilt.
+    #[test]
+    fn a_log_that_fails_to_replay_leaves_a_run_equal_to_a_fresh_one() {
+        let dir = std::env::temp_dir().join(format!("anima-run-resume-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for kind in 0..2 {
+            let (fresh_path, edited_path) =
+                (dir.join(format!("fresh{kind}.ron")), dir.join(format!("edited{kind}.ron")));
+            let _ = std::fs::remove_file(&fresh_path);
+            let fresh = optimise_logged(|| build(kind), &sphere, 40, &fresh_path, |_, _| ()).unwrap();
+
+            // The first two generations of that run, the second one's first point moved by one bit.
+            let mut log = fresh.clone();
+            log.evaluations.retain(|e| e.generation < 2);
+            log.generations = 2;
+            let second = log.evaluations.iter().position(|e| e.generation == 1).unwrap();
+            let x = &mut log.evaluations[second].x[0];
+            *x = f64::from_bits(x.to_bits() ^ 1);
+            std::fs::write(&edited_path, ron::to_string(&log).unwrap()).unwrap();
+
+            let mut refused = None;
+            let again = optimise_logged(
+                || build(kind),
+                &sphere,
+                40,
+                &edited_path,
+                |_, r| {
+                    if let Resumed::Refused(why) = r {
+                        refused = Some(why);
+                    }
+                },
+            )
+            .unwrap();
+            let why = refused.expect("the edited log was resumed");
+            assert!(why.contains(&format!("evaluation {second}")), "{why}");
+            assert_eq!(again, fresh, "kind {kind}: the run after a refused log differs from a fresh one");
+            assert_eq!(again.best(), fresh.best());
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -30,6 +30,10 @@ impl Optimiser for RandomSearch {
         "random"
     }
 
+    fn dimension(&self) -> usize {
+        self.space.len()
+    }
+
     fn stage(&self) -> usize {
         0
     }
@@ -120,6 +124,10 @@ impl Annealing {
 impl Optimiser for Annealing {
     fn name(&self) -> &'static str {
         "annealing"
+    }
+
+    fn dimension(&self) -> usize {
+        self.space.len()
     }
 
     fn stage(&self) -> usize {

@@ -283,6 +283,10 @@ impl Optimiser for Cmaes {
         "cma-es"
     }
 
+    fn dimension(&self) -> usize {
+        self.n
+    }
+
     fn stage(&self) -> usize {
         self.restart
     }

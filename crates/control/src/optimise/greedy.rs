@@ -150,6 +150,10 @@ impl Optimiser for GreedySearch {
         "greedy"
     }
 
+    fn dimension(&self) -> usize {
+        self.space.len()
+    }
+
     fn stage(&self) -> usize {
         self.stage
     }

@@ -11,7 +11,12 @@
 //! Every evaluation goes to a [`RunLog`] (serde). [`resume`] replays a log into a fresh optimiser
 //! built with the same configuration and seed — asking each generation again and telling it the
 //! logged fitnesses instead of re-evaluating — which restores the exact state, so a stopped run
-//! continued by [`run`] equals an uninterrupted one.
+//! continued by [`run`] equals an uninterrupted one. A log that does not replay leaves the optimiser
+//! to be rebuilt: see [`resume`].
+//!
+//! A fitness is always a finite number: an evaluation that fails (a fall, a simulation that
+//! diverges) is scored with a value — anima's objectives give it 0 — never NaN. [`run`] refuses a
+//! non-finite fitness, and [`resume`] a log that holds one.
 
 mod baselines;
 mod cmaes;
@@ -118,8 +123,9 @@ fn check_population(what: &str, n: usize) -> Result<(), OptimiseError> {
 
 /// What is maximised. Implemented for every `Fn(&[f64]) -> f64 + Sync`.
 pub trait Objective: Sync {
-    /// The fitness of `x` (larger is better). Must be deterministic: the same `x` gives the same
-    /// value on any thread.
+    /// The fitness of `x` (larger is better), a finite number. Must be deterministic: the same `x`
+    /// gives the same value on any thread. A failed evaluation is a value (the thesis's objectives
+    /// give 0 to a walker that falls), not NaN: [`run`] refuses a non-finite fitness.
     fn fitness(&self, x: &[f64]) -> f64;
 }
 
@@ -133,6 +139,9 @@ impl<F: Fn(&[f64]) -> f64 + Sync> Objective for F {
 pub trait Optimiser {
     /// A short name for logs.
     fn name(&self) -> &'static str;
+
+    /// The number of values of a candidate (the dimensions of its space).
+    fn dimension(&self) -> usize;
 
     /// The stage the next generation belongs to (the greedy search's stage, CMA-ES's restart).
     fn stage(&self) -> usize;
@@ -189,11 +198,33 @@ impl RunLog {
     }
 }
 
+/// A fitness that is not a finite number, refused by [`run`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "evaluation {evaluation} (x = {x:?}) has fitness {fitness}: an objective gives a finite number (a \
+     failed evaluation is a value, such as 0, never NaN)"
+)]
+pub struct FitnessError {
+    /// Its index in the log, had it been logged.
+    pub evaluation: usize,
+    pub x: Vec<f64>,
+    pub fitness: f64,
+}
+
 /// Runs `opt` until it finishes or `log` holds at least `budget` evaluations (a generation is never
 /// cut, so the last one may pass the budget). Candidates of a generation are evaluated in parallel
 /// on the current rayon pool; results do not depend on the number of threads. Continues an existing
 /// log (after [`resume`]). Returns the best candidate and fitness.
-pub fn run<O, F>(opt: &mut O, objective: &F, budget: usize, log: &mut RunLog) -> Option<(Vec<f64>, f64)>
+///
+/// A generation with a fitness that is not finite is refused whole: it is neither told nor logged,
+/// and the error names its first such evaluation. `log` then holds every generation before it, and
+/// `opt` has asked the refused one: rebuild it and [`resume`] from the log to go on.
+pub fn run<O, F>(
+    opt: &mut O,
+    objective: &F,
+    budget: usize,
+    log: &mut RunLog,
+) -> Result<Option<(Vec<f64>, f64)>, FitnessError>
 where
     O: Optimiser + ?Sized,
     F: Objective + ?Sized,
@@ -208,6 +239,10 @@ where
             break;
         }
         let fitness: Vec<f64> = candidates.par_iter().map(|x| objective.fitness(x)).collect();
+        if let Some(k) = fitness.iter().position(|f| !f.is_finite()) {
+            let evaluation = log.evaluations.len() + k;
+            return Err(FitnessError { evaluation, x: candidates[k].clone(), fitness: fitness[k] });
+        }
         let accepted = opt.tell(&candidates, &fitness);
         let generation = log.generations;
         for ((x, f), a) in candidates.into_iter().zip(fitness).zip(accepted) {
@@ -215,7 +250,7 @@ where
         }
         log.generations += 1;
     }
-    opt.best().map(|(x, f)| (x.to_vec(), f))
+    Ok(opt.best().map(|(x, f)| (x.to_vec(), f)))
 }
 
 /// A log that does not replay into the given optimiser.
@@ -232,16 +267,64 @@ pub enum ResumeError {
     Partial { evaluation: usize },
     #[error("the optimiser finished before the log's evaluation {evaluation}")]
     Finished { evaluation: usize },
+    #[error("evaluation {evaluation} of the log has fitness {fitness}; a fitness is a finite number")]
+    Fitness { evaluation: usize, fitness: f64 },
+    #[error(
+        "evaluation {evaluation} of the log has {found} values, not finite or not the optimiser's {dimension}"
+    )]
+    Point { evaluation: usize, found: usize, dimension: usize },
+    #[error("evaluation {evaluation} of the log is in generation {generation}, expected {expected}")]
+    Generation { evaluation: usize, generation: usize, expected: String },
+    #[error("the log counts {counted} generations but its evaluations are in {found}")]
+    Generations { counted: usize, found: usize },
+}
+
+/// What [`resume`] checks before it touches the optimiser: every fitness finite, every point of
+/// `dimension` finite values, generations counted from 0 up by one, the log's count of them right.
+fn check_log(log: &RunLog, dimension: usize) -> Result<(), ResumeError> {
+    let mut previous: Option<usize> = None;
+    for (i, e) in log.evaluations.iter().enumerate() {
+        if !e.fitness.is_finite() {
+            return Err(ResumeError::Fitness { evaluation: i, fitness: e.fitness });
+        }
+        if e.x.len() != dimension || e.x.iter().any(|v| !v.is_finite()) {
+            return Err(ResumeError::Point { evaluation: i, found: e.x.len(), dimension });
+        }
+        let ok = match previous {
+            None => e.generation == 0,
+            Some(g) => e.generation == g || Some(e.generation) == g.checked_add(1),
+        };
+        if !ok {
+            let expected = previous.map_or("0".to_string(), |g| format!("{g} or {}", g.saturating_add(1)));
+            return Err(ResumeError::Generation { evaluation: i, generation: e.generation, expected });
+        }
+        previous = Some(e.generation);
+    }
+    let found = previous.map_or(0, |g| g.saturating_add(1));
+    if log.generations != found {
+        return Err(ResumeError::Generations { counted: log.generations, found });
+    }
+    Ok(())
 }
 
 /// Replays `log` into `opt`, which must be freshly built with the configuration and seed of the
 /// logged run: each generation is asked again (checked bit for bit against the log) and told the
 /// logged fitnesses. Afterwards [`run`] with the same log continues exactly where it stopped.
+///
+/// The whole log is checked first, without touching `opt`: the optimiser's name, every fitness
+/// finite, every point of the optimiser's dimension and finite, generations counted from 0 up by one
+/// (see [`ResumeError`]). What can only be found by asking — a generation that differs from the
+/// log ([`ResumeError::Mismatch`]), a log that ends inside a generation or goes on after the
+/// optimiser finished — is found after the generations before it were replayed into `opt`. So on
+/// any error, **rebuild the optimiser** (the same configuration and seed) before running it: a run
+/// from the rebuilt one equals a fresh run.
 pub fn resume<O: Optimiser + ?Sized>(opt: &mut O, log: &RunLog) -> Result<(), ResumeError> {
     if !log.optimiser.is_empty() && log.optimiser != opt.name() {
         return Err(ResumeError::Optimiser { logged: log.optimiser.clone(), this: opt.name().to_string() });
     }
+    check_log(log, opt.dimension())?;
     let mut i = 0;
+    let mut generation = 0;
     while i < log.evaluations.len() {
         let candidates = opt.ask();
         if candidates.is_empty() {
@@ -254,13 +337,14 @@ pub fn resume<O: Optimiser + ?Sized>(opt: &mut O, log: &RunLog) -> Result<(), Re
         let logged = &log.evaluations[i..i + n];
         for (k, (c, e)) in candidates.iter().zip(logged).enumerate() {
             let same = c.len() == e.x.len() && c.iter().zip(&e.x).all(|(a, b)| a.to_bits() == b.to_bits());
-            if !same || e.generation != logged[0].generation {
+            if !same || e.generation != generation {
                 return Err(ResumeError::Mismatch { evaluation: i + k });
             }
         }
         let fitness: Vec<f64> = logged.iter().map(|e| e.fitness).collect();
         opt.tell(&candidates, &fitness);
         i += n;
+        generation += 1;
     }
     Ok(())
 }

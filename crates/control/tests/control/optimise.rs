@@ -2,10 +2,20 @@
 //! thread-count independence, and resuming from a log.
 
 use anima_control::optimise::{
-    Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Interval, Optimiser, RandomSearch,
-    ResumeError, RunLog, Space, Stage, resume, run,
+    Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Interval, Objective, Optimiser,
+    RandomSearch, ResumeError, RunLog, Space, Stage, resume,
 };
 use anima_control::{Controller, Procedures, Selection};
+
+/// [`anima_control::optimise::run`] of an objective whose every fitness is finite.
+fn run<O: Optimiser + ?Sized, F: Objective + ?Sized>(
+    opt: &mut O,
+    objective: &F,
+    budget: usize,
+    log: &mut RunLog,
+) -> Option<(Vec<f64>, f64)> {
+    anima_control::optimise::run(opt, objective, budget, log).expect("every fitness is finite")
+}
 
 /// Table 6.3 (Nunes 2006 p.69–70; spec §8.1.5): (T2, T3, T5, T6, fitness) per evaluation.
 const INITIAL: [f64; 5] = [0.250, 0.250, 0.250, 0.250, 0.000];
@@ -361,4 +371,91 @@ fn ipop_restarts_stop_growing_at_the_population_limit() {
     run(&mut opt, &sphere, 50_000, &mut log);
     assert_eq!(opt.restarts(), 3);
     assert_eq!(opt.lambda(), MAX_POPULATION);
+}
+
+/// A log is checked whole before the optimiser is touched: an edited one with a non-finite fitness
+/// or point, a point of another dimension, or generations that do not count up from 0 is refused, and
+/// the optimiser still asks what a fresh one asks.
+#[test]
+fn a_log_is_checked_whole_before_the_optimiser_is_touched() {
+    let mut first = optimisers(5).swap_remove(1);
+    let mut good = RunLog::default();
+    run(first.as_mut(), &busy, 100, &mut good);
+    let n = good.len();
+    assert!(good.generations >= 3, "{}", good.generations);
+    let edits: Vec<(&str, Box<dyn Fn(&mut RunLog)>)> = vec![
+        ("an infinite fitness", Box::new(move |l| l.evaluations[n - 1].fitness = f64::INFINITY)),
+        ("a NaN fitness", Box::new(move |l| l.evaluations[n - 1].fitness = f64::NAN)),
+        ("a NaN value", Box::new(move |l| l.evaluations[n - 1].x[2] = f64::NAN)),
+        ("a value too many", Box::new(move |l| l.evaluations[n - 1].x.push(0.0))),
+        ("generations from 1", Box::new(|l| l.evaluations.iter_mut().for_each(|e| e.generation += 1))),
+        ("a generation back", Box::new(move |l| l.evaluations[n - 1].generation = 0)),
+        ("a generation skipped", Box::new(move |l| l.evaluations[n - 1].generation += 1)),
+        ("a wrong count", Box::new(|l| l.generations += 1)),
+    ];
+    for (what, edit) in edits {
+        let mut log = good.clone();
+        edit(&mut log);
+        let mut opt = optimisers(5).swap_remove(1);
+        let e = resume(opt.as_mut(), &log).expect_err(what);
+        assert!(
+            matches!(
+                e,
+                ResumeError::Fitness { .. }
+                    | ResumeError::Point { .. }
+                    | ResumeError::Generation { .. }
+                    | ResumeError::Generations { .. }
+            ),
+            "{what}: {e}"
+        );
+        assert_eq!(opt.ask(), optimisers(5).swap_remove(1).ask(), "{what}: the optimiser was touched");
+    }
+    resume(optimisers(5).swap_remove(1).as_mut(), &good).unwrap();
+}
+
+/// A log whose replay fails after its first generation has changed the optimiser; rebuilt, as
+/// `resume` asks, the run equals a fresh one.
+#[test]
+fn after_a_replay_that_fails_a_rebuilt_optimiser_runs_as_a_fresh_one() {
+    for k in 0..4 {
+        let mut fresh = optimisers(9).swap_remove(k);
+        let mut fresh_log = RunLog::default();
+        let fresh_best = run(fresh.as_mut(), &busy, 300, &mut fresh_log);
+
+        // The second generation's first point moved by one bit: only asking finds it.
+        let mut log = RunLog::default();
+        run(optimisers(9).swap_remove(k).as_mut(), &busy, 100, &mut log);
+        let second = log.evaluations.iter().position(|e| e.generation == 1).unwrap();
+        let x = &mut log.evaluations[second].x[0];
+        *x = f64::from_bits(x.to_bits() ^ 1);
+        let mut opt = optimisers(9).swap_remove(k);
+        let e = resume(opt.as_mut(), &log).unwrap_err();
+        assert_eq!(e, ResumeError::Mismatch { evaluation: second }, "{}", log.optimiser);
+        assert_ne!(opt.ask(), optimisers(9).swap_remove(k).ask(), "{}: the replay went on", log.optimiser);
+
+        let mut opt = optimisers(9).swap_remove(k);
+        let mut again = RunLog::default();
+        let best = run(opt.as_mut(), &busy, 300, &mut again);
+        assert_eq!(again, fresh_log, "{}", log.optimiser);
+        assert_eq!(best, fresh_best);
+    }
+}
+
+/// An objective that gives a non-finite fitness is refused: its generation is neither told nor
+/// logged, and the error names it.
+#[test]
+fn a_non_finite_fitness_is_refused() {
+    use anima_control::optimise::FitnessError;
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let mut opt = optimisers(3).swap_remove(2);
+        let mut log = RunLog::default();
+        run(opt.as_mut(), &busy, 32, &mut log);
+        let before = log.clone();
+        let objective = |x: &[f64]| if x[0] > 0.0 { bad } else { busy(x) };
+        let e: FitnessError =
+            anima_control::optimise::run(opt.as_mut(), &objective, 64, &mut log).unwrap_err();
+        assert_eq!(log, before, "the refused generation is not logged");
+        assert!(e.evaluation >= before.len() && e.x[0] > 0.0 && e.fitness.to_bits() == bad.to_bits(), "{e}");
+        assert!(e.to_string().contains("finite"), "{e}");
+    }
 }

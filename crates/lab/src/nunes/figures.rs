@@ -374,7 +374,7 @@ fn compare(
     for (name, opt) in &mut opts {
         eprintln!("anima-lab:   {name}, {budget} evaluations …");
         let mut log = RunLog::default();
-        run(opt.as_mut(), objective, budget, &mut log);
+        run(opt.as_mut(), objective, budget, &mut log)?;
         let best = log.best().map_or(f64::NAN, |e| e.fitness);
         eprintln!("anima-lab:   {name}: best {best:.3} after {} evaluations", log.len());
         logs.push((*name, log));

@@ -155,7 +155,7 @@ fn one_run(repo: &Repo, kind: usize, seed: u64) -> Result<Measured> {
     let (name, mut opt) = optimiser(kind, seed)?;
     let objective = |x: &[f64]| score(with_poses(&base, x), &[]);
     let mut log = RunLog::default();
-    run(opt.as_mut(), &objective, BUDGET, &mut log);
+    run(opt.as_mut(), &objective, BUDGET, &mut log)?;
     let dir = repo.cache("nunes/optimisers");
     std::fs::create_dir_all(&dir)?;
     let slug: String = name.chars().filter(char::is_ascii_alphanumeric).collect();
@@ -346,7 +346,7 @@ pub(crate) fn cmaes_search(
     let mut log = RunLog::default();
     while log.len() < budget {
         let before = log.len();
-        run(&mut opt, objective, before + 1, &mut log);
+        run(&mut opt, objective, before + 1, &mut log)?;
         if log.len() == before {
             break;
         }

@@ -26,17 +26,18 @@ fn log_path(repo: &Repo, run: &str) -> PathBuf {
     repo.cache(format!("nunes/{run}.log.ron"))
 }
 
-/// Runs `opt` to `budget` evaluations with [`crate::optimise::optimise_logged`], logging to
+/// Runs the optimiser `build` makes to `budget` evaluations with
+/// [`crate::optimise::optimise_logged`] (which builds another when a log does not replay), logging to
 /// `target/anima-lab/nunes/<run>.log.ron`: a stderr line per generation.
 pub fn optimise_logged<O: Optimiser + ?Sized>(
     repo: &Repo,
     run_name: &str,
-    opt: &mut O,
+    build: impl FnMut() -> Result<Box<O>>,
     objective: &(impl Objective + ?Sized),
     budget: usize,
 ) -> Result<RunLog> {
     let path = log_path(repo, run_name);
-    crate::optimise::optimise_logged(opt, objective, budget, &path, |log, resumed| match resumed {
+    crate::optimise::optimise_logged(build, objective, budget, &path, |log, resumed| match resumed {
         Resumed::From(n) => {
             eprintln!("{run_name}: resuming after {n} logged evaluations ({})", path.display())
         }
@@ -121,9 +122,9 @@ fn walk(repo: &Repo) -> Result<String> {
     let (spec, base) = (&loaded.spec, &loaded.controller);
     let ids = base.free_params(&spec.parameters);
     let x0 = base.values_of(&ids);
-    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let build = || crate::optimise::optimiser(&loaded, &ids);
     let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
-    let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
+    let log = optimise_logged(repo, &spec.name, build, &objective, spec.evaluations)?;
 
     let before = long_run(with_values(base, &ids, &x0), 1000)?;
     let best = log.best().context("empty log")?;
@@ -343,14 +344,14 @@ fn walk_faithful(repo: &Repo) -> Result<String> {
     let (spec, base) = (&loaded.spec, &loaded.controller);
     let ids = base.free_params(&spec.parameters);
     let x0 = base.values_of(&ids);
-    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let build = || crate::optimise::optimiser(&loaded, &ids);
     let iterations = match spec.objective {
         anima_scene::optimisation::ObjectiveSpec::Walk { iterations } => iterations,
         _ => bail!("{}: the walking search has a walking objective", spec.name),
     };
     let objective =
         |x: &[f64]| faithful_run(with_values(base, &ids, x), iterations, false).map_or(0.0, |o| o.fitness());
-    let log = optimise_logged(repo, "walk-faithful", opt.as_mut(), &objective, spec.evaluations)?;
+    let log = optimise_logged(repo, "walk-faithful", build, &objective, spec.evaluations)?;
     let before = faithful_run(with_values(base, &ids, &x0), 1000, true)?;
     let best = log.best().context("empty log")?;
     let after = faithful_run(with_values(base, &ids, &best.x), 1000, false)?;
@@ -445,9 +446,9 @@ fn walk_variants(repo: &Repo) -> Result<String> {
         let (spec, base) = (&loaded.spec, &loaded.controller);
         let ids = base.free_params(&spec.parameters);
         let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
-        let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+        let build = || crate::optimise::optimiser(&loaded, &ids);
         let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
-        let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
+        let log = optimise_logged(repo, &spec.name, build, &objective, spec.evaluations)?;
         let best = log.best().context("empty log")?;
         let long = long_run(with_values(base, &ids, &best.x), 20_000)?;
         let _ = writeln!(
@@ -474,9 +475,9 @@ fn throw(repo: &Repo) -> Result<String> {
     let ids = base.free_params(&spec.parameters);
     let labels: Vec<&str> = ids.iter().map(|&i| base.params()[i.0].label.as_str()).collect();
     let x0 = base.values_of(&ids);
-    let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+    let build = || crate::optimise::optimiser(&loaded, &ids);
     let objective = |x: &[f64]| crate::optimise::fitness(&spec.objective, base, &ids, x);
-    let log = optimise_logged(repo, &spec.name, opt.as_mut(), &objective, spec.evaluations)?;
+    let log = optimise_logged(repo, &spec.name, build, &objective, spec.evaluations)?;
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
     let best = log.best().context("empty log")?;
     let outcome = |x: &[f64]| -> Result<nunes::ThrowOutcome> {
@@ -614,10 +615,9 @@ fn throw_global(repo: &Repo, local: &LoadedOptimisation, local_best: &[f64]) -> 
     let mut winners = Vec::new();
     for spec in [spec, literal] {
         let loaded = LoadedOptimisation { spec, controller: base.clone() };
-        let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
+        let build = || crate::optimise::optimiser(&loaded, &ids);
         let objective = |x: &[f64]| crate::optimise::fitness(&loaded.spec.objective, base, &ids, x);
-        let log =
-            optimise_logged(repo, &loaded.spec.name, opt.as_mut(), &objective, loaded.spec.evaluations)?;
+        let log = optimise_logged(repo, &loaded.spec.name, build, &objective, loaded.spec.evaluations)?;
         let best = log.best().context("empty log")?.x.clone();
         let accepted = log.evaluations.iter().filter(|e| e.accepted && e.generation > 0).count();
         winners.push((best, accepted));
