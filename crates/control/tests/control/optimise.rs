@@ -383,7 +383,8 @@ fn a_log_is_checked_whole_before_the_optimiser_is_touched() {
     run(first.as_mut(), &busy, 100, &mut good);
     let n = good.len();
     assert!(good.generations >= 3, "{}", good.generations);
-    let edits: Vec<(&str, Box<dyn Fn(&mut RunLog)>)> = vec![
+    type Edit = Box<dyn Fn(&mut RunLog)>;
+    let edits: Vec<(&str, Edit)> = vec![
         ("an infinite fitness", Box::new(move |l| l.evaluations[n - 1].fitness = f64::INFINITY)),
         ("a NaN fitness", Box::new(move |l| l.evaluations[n - 1].fitness = f64::NAN)),
         ("a NaN value", Box::new(move |l| l.evaluations[n - 1].x[2] = f64::NAN)),
