@@ -104,6 +104,12 @@ impl Annealing {
                 "annealing needs one x0 value per dimension, t0 > 0 and 0 < cooling ≤ 1".into(),
             ));
         }
+        if let Some((d, v)) = space.dims.iter().zip(&cfg.x0).find(|(d, v)| !(d.min..=d.max).contains(*v)) {
+            return Err(OptimiseError::Config(format!(
+                "annealing starts inside the box: x0's `{}` is {v}, outside [{}, {}]",
+                d.name, d.min, d.max
+            )));
+        }
         Ok(Self {
             x: cfg.x0.clone(),
             t: cfg.t0,

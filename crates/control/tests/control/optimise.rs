@@ -460,3 +460,20 @@ fn a_non_finite_fitness_is_refused() {
         assert!(e.to_string().contains("finite"), "{e}");
     }
 }
+
+/// An annealing start that is NaN or outside its interval is refused (a NaN start used to write a
+/// controller anima then refused to read).
+#[test]
+fn an_annealing_start_outside_the_box_is_refused() {
+    use anima_control::optimise::OptimiseError;
+    let space = Space::cube(2, -1.0, 1.0);
+    for x0 in [vec![f64::NAN, 0.0], vec![0.0, 1.5], vec![f64::NEG_INFINITY, 0.0]] {
+        let cfg = AnnealingConfig { x0: x0.clone(), t0: 1.0, cooling: 0.9, step: 0.1, batch: 1 };
+        match Annealing::new(space.clone(), cfg, 1) {
+            Err(OptimiseError::Config(why)) => assert!(why.contains("outside"), "{why}"),
+            other => panic!("{x0:?}: {:?}", other.map(|_| ())),
+        }
+    }
+    let cfg = AnnealingConfig { x0: vec![-1.0, 1.0], t0: 1.0, cooling: 0.9, step: 0.1, batch: 1 };
+    assert!(Annealing::new(space, cfg, 1).is_ok(), "the interval's ends are inside");
+}
