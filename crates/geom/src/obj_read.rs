@@ -160,7 +160,7 @@ mod tests {
     #[test]
     fn one_long_polygon_is_refused_at_its_corner_bound() {
         let mut src: String = (0..300).map(|k| format!("v {k} {} 0\n", k * k)).collect();
-        src.push_str("f");
+        src.push('f');
         for k in 1..=300 {
             src.push_str(&format!(" {k}"));
         }
