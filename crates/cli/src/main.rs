@@ -29,7 +29,11 @@ use crate::progress::Bar;
     about,
     after_help = "Exit status: 0 when the command did what was asked; 1 for bad input (a scene, spec or option \
                   that cannot be used, an output that cannot be written: the message names the file, line and \
-                  column); 2 when a run diverged (it stopped at the first non-finite value and says where)."
+                  column); 2 when a run diverged (it stopped at the first non-finite value and says where).\n\n\
+                  Limits (anima_format::limits; larger is refused where it is written): 4000000 particles a \
+                  scene, 1e9 steps and 1e6 frames a run, 256 MiB a file, 1e6 m for an object's size or \
+                  position, 1000 bodies or joints a skeleton, 10000 states a controller, 10000 candidates a \
+                  generation, 1000000 evaluations an optimisation, 256 corners an OBJ face."
 )]
 struct Cli {
     #[command(subcommand)]

@@ -267,6 +267,27 @@ fn exit_statuses_are_documented() {
     );
 }
 
+/// The help states the limits as they are (a limit changed in `anima_format::limits` changes the help).
+#[test]
+fn limits_are_documented() {
+    use anima_scene::limits::*;
+    let help = String::from_utf8_lossy(&anima().arg("--help").output().unwrap().stdout).replace('\n', " ");
+    let help = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    for stated in [
+        format!("{MAX_PARTICLES} particles a scene"),
+        format!("{MAX_STEPS:e} steps and {MAX_FRAMES:e} frames a run"),
+        format!("{} MiB a file", MAX_FILE_BYTES >> 20),
+        format!("{MAX_LENGTH_M:e} m for an object's size"),
+        format!("{MAX_BODIES} bodies or joints a skeleton"),
+        format!("{MAX_STATES} states a controller"),
+        format!("{MAX_POPULATION} candidates a generation"),
+        format!("{MAX_EVALUATIONS} evaluations an optimisation"),
+        format!("{} corners an OBJ face", anima_geom::MAX_FACE_CORNERS),
+    ] {
+        assert!(help.contains(&stated), "the help says `{stated}`: {help}");
+    }
+}
+
 #[test]
 fn an_interrupted_run_leaves_no_temporary_file() {
     if Command::new("kill").arg("-l").output().is_err() {
