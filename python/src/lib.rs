@@ -654,6 +654,12 @@ impl Optimisation {
             return Err(PyRuntimeError::new_err("run() with a generation asked and not told"));
         }
         let budget = budget.unwrap_or(self.budget);
+        let max = anima_run::optimise::MAX_EVALUATIONS;
+        if budget == 0 || budget > max {
+            return Err(value_error(format!(
+                "expected a budget of 1 to {max} evaluations (anima's limit), found {budget}"
+            )));
+        }
         let (opt, log, e) = (&mut self.opt, &mut self.log, &self.evaluator);
         py.detach(|| {
             let objective = |x: &[f64]| anima_run::optimise::fitness(&e.objective, &e.controller, &e.ids, x);

@@ -100,3 +100,14 @@ def test_a_log_that_fails_to_replay_leaves_the_optimisation_fresh(assets, tmp_pa
     assert resumed.evaluations == 0
     fresh = anima.Optimisation(spec(assets))
     assert np.array_equal(resumed.ask(), fresh.ask())
+
+
+def test_a_budget_beyond_the_limit_is_refused(assets):
+    import pytest
+
+    o = anima.Optimisation(spec(assets))
+    with pytest.raises(ValueError, match="anima's limit"):
+        o.run(10**7)
+    with pytest.raises(ValueError, match="anima's limit"):
+        o.run(0)
+    assert o.evaluations == 0

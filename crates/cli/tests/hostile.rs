@@ -336,6 +336,15 @@ fn spec_names_are_data_not_paths() {
         assert!(all_files(&dir).iter().all(|p| p == &spec), "{bad}: nothing written: {:?}", all_files(&dir));
     }
     assert!(!Path::new("/tmp/anima-escaped.log.ron").exists());
+    // A budget beyond the limit from the command line is refused before anything runs.
+    let o = anima()
+        .args(["optimise", "--quiet", "--evaluations", "10000000", "--out"])
+        .arg(dir.join("out"))
+        .arg(assets("optimisations/throw.ron"))
+        .output()
+        .unwrap();
+    refused(&o, &["anima's limit", "10000000"]);
+    assert!(!dir.join("out").join("throw-greedy-capped.log.ron").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
