@@ -654,7 +654,7 @@ impl Optimisation {
             return Err(PyRuntimeError::new_err("run() with a generation asked and not told"));
         }
         let budget = budget.unwrap_or(self.budget);
-        let max = anima_run::optimise::MAX_EVALUATIONS;
+        let max = anima_scene::limits::MAX_EVALUATIONS;
         if budget == 0 || budget > max {
             return Err(value_error(format!(
                 "expected a budget of 1 to {max} evaluations (anima's limit), found {budget}"

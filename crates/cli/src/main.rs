@@ -441,8 +441,15 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.
     anima_run::output::check_output_path(&summary_path)?;
-    if args.summary.is_some() && !args.force && summary_path.exists() && !summary_path.starts_with(&args.out)
-    {
+    // Inside OUT when its folder is OUT or below it, however either is spelled (`./out`, `out/`).
+    let in_out = || {
+        let parent = summary_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        std::fs::canonicalize(parent)
+            .ok()
+            .zip(std::fs::canonicalize(&args.out).ok())
+            .is_some_and(|(p, out)| p.starts_with(out))
+    };
+    if args.summary.is_some() && !args.force && summary_path.exists() && !in_out() {
         anyhow::bail!(
             "{} exists and is not in the output folder {}; pass --force to replace it",
             summary_path.display(),

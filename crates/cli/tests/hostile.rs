@@ -380,6 +380,17 @@ fn outputs_go_to_new_or_regular_files_only() {
     refused(&with_summary(&dir.join("mine.json"), &[]), &["pass --force"]);
     assert_eq!(std::fs::read_to_string(dir.join("mine.json")).unwrap(), "keep");
     assert!(with_summary(&dir.join("mine.json"), &["--force"]).status.success());
+    // A file in --out is the run's own, however the paths are spelled (here --out relative, --summary
+    // absolute).
+    std::fs::write(dir.join("out/own.json"), "old").unwrap();
+    let o = anima()
+        .current_dir(&dir)
+        .args(["run", "--quiet", "--no-pictures", "--duration", "1", "--out", "out", "--summary"])
+        .arg(dir.join("out/own.json"))
+        .arg(&curtain)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(std::fs::read_to_string(dir.join("mine.json")).unwrap().contains("\"steps\""));
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -14,10 +14,6 @@ use anima_scene::optimisation::{LoadedOptimisation, ObjectiveSpec, OptimiserSpec
 use anyhow::{Context, Result, bail};
 
 use crate::objectives;
-
-/// The most evaluations one optimisation may run (`anima_format::limits::MAX_EVALUATIONS`), for
-/// callers that name no scene crate.
-pub const MAX_EVALUATIONS: usize = anima_scene::limits::MAX_EVALUATIONS;
 use crate::output::write_atomic;
 use crate::run::Progress;
 
@@ -162,7 +158,7 @@ pub fn optimise(
         );
     }
     let budget = opts.evaluations.unwrap_or(spec.evaluations);
-    let max = MAX_EVALUATIONS;
+    let max = anima_scene::limits::MAX_EVALUATIONS;
     if budget == 0 || budget > max {
         bail!("expected a budget of 1 to {max} evaluations (anima's limit), found {budget}");
     }

@@ -141,7 +141,6 @@ pub fn run(
             let t_end = if k == n_frames { scene.duration_s } else { k as f64 / scene.frame_rate_hz };
             let control =
                 StepControl::Adaptive { tolerance: 1e-6, dt_initial: h, dt_min: 1e-8, dt_max: 0.01 };
-            let mut last_h = h;
             let stepped =
                 integrate(sim.system(), &mut stepper, control, t, t_end, &mut state, &mut scratch, |_, _| {});
             match stepped {
@@ -149,7 +148,7 @@ pub fn run(
                     taken += stats.steps as u64;
                     evaluations += stats.evaluations;
                     if stats.largest_dt > 0.0 {
-                        last_h = stats.largest_dt.min(0.01);
+                        h = stats.largest_dt;
                     }
                     t = t_end;
                 }
@@ -159,7 +158,6 @@ pub fn run(
                     break;
                 }
             }
-            h = last_h;
             frames = k;
             sim.model_mut().set_state(&state.x, &state.v);
             watch.look(sim.model().positions(), &triangles);

@@ -20,8 +20,8 @@
 //! round-trip form, so a reader gets back exactly the positions the glTF file holds.
 
 use std::collections::HashSet;
-use std::fmt::Write as _;
-use std::io::Write;
+use std::fmt;
+use std::io;
 
 use anima_geom::{DVec3, TriangleMesh};
 
@@ -34,27 +34,49 @@ pub const TIME_CODES_PER_SECOND: f64 = 1000.0;
 impl Animation {
     /// Writes the animation as a USD stage in text form (`.usda`; see [`self::usd`](self) for the
     /// layout). Objects without a frame are left out, as in [`Animation::write_glb`].
-    pub fn write_usda(&self, mut w: impl Write) -> Result<(), VizError> {
-        let text = usda(self);
-        w.write_all(text.as_bytes()).map_err(VizError::UsdWrite)
+    /// The text goes to `w` as it is made, never held whole: a long drape's stage is as large as its
+    /// frames.
+    pub fn write_usda(&self, w: impl io::Write) -> Result<(), VizError> {
+        let mut sink = Sink { w, error: None };
+        usda(self, &mut sink);
+        match sink.error {
+            Some(e) => Err(VizError::UsdWrite(e)),
+            None => Ok(()),
+        }
     }
 }
 
-/// The stage's text.
-fn usda(anim: &Animation) -> String {
+/// An `io::Write` as the `fmt::Write` the text is made with, keeping the first I/O error (after
+/// which nothing more is written).
+struct Sink<W> {
+    w: W,
+    error: Option<io::Error>,
+}
+
+impl<W: io::Write> fmt::Write for Sink<W> {
+    fn write_str(&mut self, text: &str) -> fmt::Result {
+        if self.error.is_some() {
+            return Err(fmt::Error);
+        }
+        self.w.write_all(text.as_bytes()).map_err(|e| {
+            self.error = Some(e);
+            fmt::Error
+        })
+    }
+}
+
+/// Writes `text`; a failed write is kept by the [`Sink`] and ends the output there.
+fn put(s: &mut dyn fmt::Write, text: &str) {
+    let _ = s.write_str(text);
+}
+
+/// The stage's text, into `s`.
+fn usda(anim: &Animation, s: &mut dyn fmt::Write) {
     let up = anim.up;
-    let mut times: Vec<f32> = Vec::new();
-    for d in anim.deforming.iter().filter(|d| d.n_frames() > 0) {
-        times.extend_from_slice(d.times());
-    }
-    for r in &anim.remeshed {
-        times.extend(r.frames.iter().map(|f| f.time));
-    }
-    for f in anim.figures.iter().filter(|f| f.n_frames() > 0) {
-        times.extend_from_slice(&f.times);
-    }
-    let (start, end) =
-        times.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &t| (a.min(t), b.max(t)));
+    let times = (anim.deforming.iter().flat_map(|d| d.times().iter().copied()))
+        .chain(anim.remeshed.iter().flat_map(|r| r.frames.iter().map(|f| f.time)))
+        .chain(anim.figures.iter().flat_map(|f| f.times.iter().copied()));
+    let (start, end) = times.fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
     let (start, end) = if start <= end { (f64::from(start), f64::from(end)) } else { (0.0, 0.0) };
     let frames = anim
         .deforming
@@ -66,7 +88,6 @@ fn usda(anim: &Animation) -> String {
         .unwrap_or(0);
     let fps =
         if frames > 1 && end > start { ((frames - 1) as f64 / (end - start)).round().max(1.0) } else { 24.0 };
-    let mut s = String::new();
     let _ = write!(
         s,
         "#usda 1.0\n(\n    defaultPrim = \"anima\"\n    doc = \"Written by anima\"\n    endTimeCode = {}\n    \
@@ -78,51 +99,47 @@ fn usda(anim: &Animation) -> String {
     );
     let mut names = Names::default();
     for o in &anim.statics {
-        let points: Vec<[f32; 3]> = o.mesh.vertices().iter().map(|p| f32s(up, *p)).collect();
-        open_mesh(&mut s, 1, &names.unique(&o.name), o.colour);
-        topology(&mut s, 2, o.mesh.triangles());
-        let _ = writeln!(s, "        float3[] extent = {}", extent(&points));
-        let _ = writeln!(s, "        point3f[] points = {}", list(&points));
-        s.push_str("    }\n");
+        open_mesh(s, 1, &names.unique(&o.name), o.colour);
+        topology(s, 2, o.mesh.triangles());
+        still_points(s, 2, up, &o.mesh);
+        put(s, "    }\n");
     }
     for d in anim.deforming.iter().filter(|d| d.n_frames() > 0) {
-        open_mesh(&mut s, 1, &names.unique(d.name()), d.colour);
-        topology(&mut s, 2, &d.triangles);
-        let frames = (0..d.n_frames()).map(|k| (d.times()[k], rotated(up, d.frame(k))));
-        samples(&mut s, frames.collect());
-        s.push_str("    }\n");
+        open_mesh(s, 1, &names.unique(d.name()), d.colour);
+        topology(s, 2, &d.triangles);
+        samples(s, up, d.n_frames(), |k| (d.times()[k], d.frame(k)));
+        put(s, "    }\n");
     }
     for r in anim.remeshed.iter().filter(|r| r.n_frames() > 0) {
-        open_mesh(&mut s, 1, &names.unique(&r.name), r.colour);
-        s.push_str("        int[] faceVertexCounts.timeSamples = {\n");
+        open_mesh(s, 1, &names.unique(&r.name), r.colour);
+        put(s, "        int[] faceVertexCounts.timeSamples = {\n");
         for f in &r.frames {
-            let _ = writeln!(
-                s,
-                "            {}: [{}],",
-                code(f64::from(f.time)),
-                vec!["3"; f.triangles.len()].join(", ")
-            );
+            let _ = write!(s, "            {}: ", code(f64::from(f.time)));
+            bracketed(s, &f.triangles, |s, _| put(s, "3"));
+            put(s, ",\n");
         }
-        s.push_str("        }\n        int[] faceVertexIndices.timeSamples = {\n");
+        put(s, "        }\n        int[] faceVertexIndices.timeSamples = {\n");
         for f in &r.frames {
-            let _ = writeln!(s, "            {}: {},", code(f64::from(f.time)), indices(&f.triangles));
+            let _ = write!(s, "            {}: ", code(f64::from(f.time)));
+            indices(s, &f.triangles);
+            put(s, ",\n");
         }
-        s.push_str("        }\n");
-        samples(&mut s, r.frames.iter().map(|f| (f.time, rotated(up, &f.positions))).collect());
-        s.push_str("    }\n");
+        put(s, "        }\n");
+        samples(s, up, r.frames.len(), |k| (r.frames[k].time, &r.frames[k].positions[..]));
+        put(s, "    }\n");
     }
     for f in anim.figures.iter().filter(|f| f.n_frames() > 0) {
         let _ = writeln!(s, "    def Xform \"{}\"\n    {{", names.unique(f.name()));
         let mut links = Names::default();
         for (i, link) in f.links().iter().enumerate() {
             let _ = writeln!(s, "        def Xform \"{}\"\n        {{", links.unique(&link.name));
-            s.push_str("            float3 xformOp:translate.timeSamples = {\n");
+            put(s, "            float3 xformOp:translate.timeSamples = {\n");
             for k in 0..f.n_frames() {
                 let p = f.frame(k)[i].translation;
                 let _ =
                     writeln!(s, "                {}: {},", code(f64::from(f.times[k])), tuple(&f32s(up, p)));
             }
-            s.push_str("            }\n            quatf xformOp:orient.timeSamples = {\n");
+            put(s, "            }\n            quatf xformOp:orient.timeSamples = {\n");
             for k in 0..f.n_frames() {
                 let q = up.rotation_to_gltf(f.frame(k)[i].rotation);
                 let wxyz = [q.w, q.x, q.y, q.z].map(|v| v as f32);
@@ -136,31 +153,38 @@ fn usda(anim: &Animation) -> String {
                     wxyz[3]
                 );
             }
-            s.push_str(
+            put(
+                s,
                 "            }\n            uniform token[] xformOpOrder = [\"xformOp:translate\", \"xformOp:orient\"]\n",
             );
-            shape(&mut s, up, &link.shape, link.colour);
-            s.push_str("        }\n");
+            shape(s, up, &link.shape, link.colour);
+            put(s, "        }\n");
         }
-        s.push_str("    }\n");
+        put(s, "    }\n");
     }
-    s.push_str("}\n");
-    s
+    put(s, "}\n");
 }
 
 /// A link's shape in its own frame.
-fn shape(s: &mut String, up: UpAxis, mesh: &TriangleMesh, colour: [u8; 3]) {
-    let points: Vec<[f32; 3]> = mesh.vertices().iter().map(|p| f32s(up, *p)).collect();
+fn shape(s: &mut dyn fmt::Write, up: UpAxis, mesh: &TriangleMesh, colour: [u8; 3]) {
     open_mesh(s, 3, "shape", colour);
     topology(s, 4, mesh.triangles());
-    let pad = "    ".repeat(4);
-    let _ = writeln!(s, "{pad}float3[] extent = {}", extent(&points));
-    let _ = writeln!(s, "{pad}point3f[] points = {}", list(&points));
+    still_points(s, 4, up, mesh);
     let _ = writeln!(s, "{}}}", "    ".repeat(3));
 }
 
+/// The `extent` and `points` of a mesh that does not move, at `depth` levels of indentation.
+fn still_points(s: &mut dyn fmt::Write, depth: usize, up: UpAxis, mesh: &TriangleMesh) {
+    let points: Vec<[f32; 3]> = mesh.vertices().iter().map(|p| f32s(up, *p)).collect();
+    let pad = "    ".repeat(depth);
+    let _ = writeln!(s, "{pad}float3[] extent = {}", extent(&points));
+    let _ = write!(s, "{pad}point3f[] points = ");
+    list(s, &points);
+    put(s, "\n");
+}
+
 /// `def Mesh "name"` with its display colour and no subdivision, at `depth` levels of indentation.
-fn open_mesh(s: &mut String, depth: usize, name: &str, colour: [u8; 3]) {
+fn open_mesh(s: &mut dyn fmt::Write, depth: usize, name: &str, colour: [u8; 3]) {
     let pad = "    ".repeat(depth);
     let c = colour.map(|c| f32::from(c) / 255.0);
     let _ = write!(
@@ -173,23 +197,40 @@ fn open_mesh(s: &mut String, depth: usize, name: &str, colour: [u8; 3]) {
 }
 
 /// Triangles as face counts and indices.
-fn topology(s: &mut String, depth: usize, triangles: &[[u32; 3]]) {
+fn topology(s: &mut dyn fmt::Write, depth: usize, triangles: &[[u32; 3]]) {
     let pad = "    ".repeat(depth);
-    let _ = writeln!(s, "{pad}int[] faceVertexCounts = [{}]", vec!["3"; triangles.len()].join(", "));
-    let _ = writeln!(s, "{pad}int[] faceVertexIndices = {}", indices(triangles));
+    let _ = write!(s, "{pad}int[] faceVertexCounts = ");
+    bracketed(s, triangles, |s, _| put(s, "3"));
+    let _ = write!(s, "\n{pad}int[] faceVertexIndices = ");
+    indices(s, triangles);
+    put(s, "\n");
 }
 
-/// Time-sampled `points` and `extent` of a mesh at depth 2.
-fn samples(s: &mut String, frames: Vec<(f32, Vec<[f32; 3]>)>) {
-    s.push_str("        float3[] extent.timeSamples = {\n");
-    for (t, p) in &frames {
-        let _ = writeln!(s, "            {}: {},", code(f64::from(*t)), extent(p));
+/// Time-sampled `points` and `extent` of a mesh at depth 2: `frame(k)` is frame k's time and positions
+/// in the run's axes, turned to y up as they are written.
+fn samples<'a>(
+    s: &mut dyn fmt::Write,
+    up: UpAxis,
+    n_frames: usize,
+    frame: impl Fn(usize) -> (f32, &'a [[f32; 3]]),
+) {
+    let turned = |p: &'a [[f32; 3]]| p.iter().map(move |&q| up.to_gltf(q));
+    put(s, "        float3[] extent.timeSamples = {\n");
+    for k in 0..n_frames {
+        let (t, p) = frame(k);
+        let box_ = extent(&turned(p).collect::<Vec<_>>());
+        let _ = writeln!(s, "            {}: {box_},", code(f64::from(t)));
     }
-    s.push_str("        }\n        point3f[] points.timeSamples = {\n");
-    for (t, p) in &frames {
-        let _ = writeln!(s, "            {}: {},", code(f64::from(*t)), list(p));
+    put(s, "        }\n        point3f[] points.timeSamples = {\n");
+    for k in 0..n_frames {
+        let (t, p) = frame(k);
+        let _ = write!(s, "            {}: ", code(f64::from(t)));
+        bracketed(s, turned(p), |s, q| {
+            let _ = write!(s, "({}, {}, {})", q[0], q[1], q[2]);
+        });
+        put(s, ",\n");
     }
-    s.push_str("        }\n");
+    put(s, "        }\n");
 }
 
 /// A time in seconds as a time code.
@@ -201,38 +242,36 @@ fn f32s(up: UpAxis, p: DVec3) -> [f32; 3] {
     up.to_gltf(p.to_array()).map(|v| v as f32)
 }
 
-fn rotated(up: UpAxis, p: &[[f32; 3]]) -> Vec<[f32; 3]> {
-    p.iter().map(|&q| up.to_gltf(q)).collect()
-}
-
 fn tuple(p: &[f32; 3]) -> String {
     format!("({}, {}, {})", p[0], p[1], p[2])
 }
 
-fn list(points: &[[f32; 3]]) -> String {
-    let mut s = String::with_capacity(points.len() * 30 + 2);
-    s.push('[');
-    for (k, p) in points.iter().enumerate() {
+/// `[a, b, …]` with each item written by `each`.
+fn bracketed<T>(
+    s: &mut dyn fmt::Write,
+    items: impl IntoIterator<Item = T>,
+    each: impl Fn(&mut dyn fmt::Write, T),
+) {
+    put(s, "[");
+    for (k, item) in items.into_iter().enumerate() {
         if k > 0 {
-            s.push_str(", ");
+            put(s, ", ");
         }
-        let _ = write!(s, "({}, {}, {})", p[0], p[1], p[2]);
+        each(s, item);
     }
-    s.push(']');
-    s
+    put(s, "]");
 }
 
-fn indices(triangles: &[[u32; 3]]) -> String {
-    let mut s = String::with_capacity(triangles.len() * 12 + 2);
-    s.push('[');
-    for (k, t) in triangles.iter().enumerate() {
-        if k > 0 {
-            s.push_str(", ");
-        }
+fn list(s: &mut dyn fmt::Write, points: &[[f32; 3]]) {
+    bracketed(s, points, |s, p| {
+        let _ = write!(s, "({}, {}, {})", p[0], p[1], p[2]);
+    });
+}
+
+fn indices(s: &mut dyn fmt::Write, triangles: &[[u32; 3]]) {
+    bracketed(s, triangles, |s, t| {
         let _ = write!(s, "{}, {}, {}", t[0], t[1], t[2]);
-    }
-    s.push(']');
-    s
+    });
 }
 
 /// The bounding box of `points` as USD's `extent`, [(min), (max)].
@@ -294,7 +333,8 @@ mod tests {
         d.push_frame(0.0, &[DVec3::ZERO, DVec3::X, DVec3::Y]).unwrap();
         d.push_frame(0.5, &[DVec3::Z, DVec3::X + DVec3::Z, DVec3::Y + DVec3::Z]).unwrap();
         anim.deforming.push(d);
-        let text = usda(&anim);
+        let mut text = String::new();
+        usda(&anim, &mut text);
         assert!(text.starts_with("#usda 1.0\n"));
         for wanted in [
             "defaultPrim = \"anima\"",
