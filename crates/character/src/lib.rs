@@ -54,7 +54,7 @@
 //! ```
 
 use anima_body::sensors::catalogue::{self, LandCombine};
-use anima_body::{BodyError, Sensors, Signal, Target, TargetFrame, World};
+use anima_body::{BodyError, Sensors, Signal, Skeleton, Target, TargetFrame, World};
 use anima_control::{
     Controller, ControllerError, Frame, Procedures, SensorInput, SensorQuery, TargetKind, Targets,
 };
@@ -73,7 +73,26 @@ pub enum CharacterError {
     #[error("a torso target on `{actuator}` names `{swing}` as its swing: the two must drive one model")]
     TorsoAcrossModels { actuator: String, swing: String },
     #[error("sensor `{name}`: {why}")]
-    Sensor { name: String, why: String },
+    Sensor { name: String, field: String, why: String },
+    #[error("{why}")]
+    Procedure { field: String, why: String },
+}
+
+impl CharacterError {
+    /// The error as the controller file's located error, when it concerns one of the file's fields (a
+    /// sensor, a procedure call): `text` is the file's text, for the line and column.
+    pub fn field_error(&self, text: &str) -> Option<ControllerError> {
+        match self {
+            Self::Description(e) => Some(e.clone()),
+            Self::Sensor { name, field, why } => {
+                Some(ControllerError::invalid(field.as_str(), format!("sensor `{name}`: {why}")).locate(text))
+            }
+            Self::Procedure { field, why } => {
+                Some(ControllerError::invalid(field.as_str(), why.as_str()).locate(text))
+            }
+            _ => None,
+        }
+    }
 }
 
 /// One sensor's computation, resolved once from its kind and arguments.
@@ -218,6 +237,14 @@ impl SensorInput for BodyEnv {
     }
 }
 
+/// `push(model, body, fx, fy)`: four arguments, the force's two finite numbers; the model and the body
+/// are checked against the skeletons when the controller is bound ([`check_controller`]).
+fn check_push(a: &anima_control::CallArgs<'_>) -> Result<(), String> {
+    a.expect_count(4, "model, body, fx, fy")?;
+    a.expect_number(2)?;
+    a.expect_number(3)
+}
+
 /// The procedures every character offers besides the controller crate's built-ins:
 ///
 /// - `release_ball`: releases every hand–ball weld (spec §8.3.1, on the throw's T2);
@@ -225,11 +252,15 @@ impl SensorInput for BodyEnv {
 ///   §3.6; model and body by name, e.g. `push("", "head", -150, 0)`).
 pub fn procedures() -> Procedures<BodyEnv> {
     let mut p: Procedures<BodyEnv> = Procedures::with_builtins();
-    p.register("release_ball", |ctx| {
-        // A release of welds that exist cannot fail; nothing to report from inside a step.
-        let _ = ctx.env.release_all_welds();
-    });
-    p.register("push", |ctx| {
+    p.register_checked(
+        "release_ball",
+        |a| a.expect_count(0, "none"),
+        |ctx| {
+            // A release of welds that exist cannot fail; nothing to report from inside a step.
+            let _ = ctx.env.release_all_welds();
+        },
+    );
+    p.register_checked("push", check_push, |ctx| {
         let args = ctx.args().to_vec();
         let num = |k: usize| args.get(k).and_then(|a| a.parse::<f64>().ok()).unwrap_or(0.0);
         let env = &mut *ctx.env;
@@ -263,6 +294,121 @@ fn side_of(args: &[String]) -> Option<usize> {
     })
 }
 
+/// What binding a controller to its models resolves once: each controller actuator's (model,
+/// actuator) and each sensor's computation.
+struct Bound {
+    actuators: Vec<(usize, usize)>,
+    bindings: Vec<Binding>,
+}
+
+/// Checks that `controller` can drive models with these skeletons (`aliases` as in [`Character::new`]):
+/// every actuator names one of theirs, every sensor is a kind the catalogue computes with the
+/// arguments it needs, every `push` names a model and a body they have. Needs no world, so a scene
+/// reader can check a controller file when it reads it; the errors that concern a field of the file
+/// name it ([`CharacterError::field_error`]).
+pub fn check_controller(
+    controller: &Controller,
+    skeletons: &[&Skeleton],
+    procedures: &Procedures<BodyEnv>,
+    aliases: &[&str],
+) -> Result<(), CharacterError> {
+    bind(controller, skeletons, procedures, aliases).map(|_| ())
+}
+
+fn bind(
+    controller: &Controller,
+    skeletons: &[&Skeleton],
+    procedures: &Procedures<BodyEnv>,
+    aliases: &[&str],
+) -> Result<Bound, CharacterError> {
+    let n_models = skeletons.len();
+    let skeleton = |m: usize| skeletons.get(m).copied().ok_or(BodyError::NoSuchModel(m));
+    let model_of = |name: &str| aliases.iter().position(|a| *a == name);
+    let mut actuators = Vec::with_capacity(controller.actuators().len());
+    for name in controller.actuators() {
+        let (m, local) = match name.split_once('/') {
+            Some((alias, local)) => {
+                (model_of(alias).ok_or_else(|| CharacterError::Actuator(name.clone()))?, local)
+            }
+            None => (0, name.as_str()),
+        };
+        let a = skeleton(m)?.actuator_index(local).ok_or_else(|| CharacterError::Actuator(name.clone()))?;
+        actuators.push((m, a));
+    }
+    let mut bindings = Vec::with_capacity(controller.sensors().len());
+    for s in controller.sensors() {
+        let models: Vec<usize> = s.args.iter().filter_map(|a| model_of(a)).collect();
+        let model = models.first().copied().unwrap_or(0);
+        // `part`: the sensor's field at fault, `kind` or `args`.
+        let err = |part: &str, why: &str| CharacterError::Sensor {
+            name: s.name.clone(),
+            field: format!("{}.{part}", s.field),
+            why: why.into(),
+        };
+        let side = || side_of(&s.args).ok_or_else(|| err("args", "needs a side, `left` or `right`"));
+        let b = match s.kind.as_str() {
+            "foot_up" => Binding::FootUp { model, side: side()? },
+            "cog_ahead" => Binding::CogAhead { model, side: side()? },
+            "landing" => Binding::Landing {
+                model,
+                side: side()?,
+                combine: if s.args.iter().any(|a| a == "and") { LandCombine::And } else { LandCombine::Or },
+            },
+            "falling_forward" => Binding::FallingForward { model },
+            "falling_backward" => Binding::FallingBackward { model },
+            "foot_on_hands" => {
+                let acrobat = model_of("acrobat").unwrap_or(0);
+                let pusher = model_of("pusher").unwrap_or(1.min(n_models.saturating_sub(1)));
+                Binding::FootOnHands { acrobat, pusher }
+            }
+            "flip_brake" => Binding::FlipBrake { model },
+            "both_feet_down" => Binding::BothFeetDown { model },
+            "cog_low" => Binding::CogLow { model },
+            "trunk_angle" => {
+                let joint =
+                    skeleton(model)?.joint_index("waist").ok_or_else(|| err("kind", "no `waist` joint"))?;
+                Binding::TrunkAngle { model, joint }
+            }
+            "com_offset" => Binding::ComOffset { model, side: side()? },
+            "com_speed" => Binding::ComSpeed { model },
+            "trunk_rate" => Binding::TrunkRate { model },
+            "ground_slope" => Binding::GroundSlope { model },
+            "com_ahead_of_ankle" => Binding::ComAheadOfAnkle { model, side: side()? },
+            "foot_down" => Binding::FootDown { model, side: side()? },
+            "capture_outside" => Binding::CaptureOutside { model },
+            "never" => Binding::Never,
+            other => return Err(err("kind", &format!("unknown sensor kind `{other}`"))),
+        };
+        bindings.push(b);
+    }
+    for (a, swing) in controller.torso_pairs() {
+        if actuators[a].0 != actuators[swing].0 {
+            let names = controller.actuators();
+            return Err(CharacterError::TorsoAcrossModels {
+                actuator: names[a].clone(),
+                swing: names[swing].clone(),
+            });
+        }
+    }
+    if let Some(push) = procedures.index("push") {
+        for (_, args, field) in controller.calls().filter(|&(p, ..)| p == push) {
+            let why = |why: String| CharacterError::Procedure { field: format!("{field}.args"), why };
+            let model = match args.first().map(String::as_str) {
+                None | Some("") => 0,
+                Some(name) => skeletons.iter().position(|sk| sk.name() == name).ok_or_else(|| {
+                    let names: Vec<&str> = skeletons.iter().map(|sk| sk.name()).collect();
+                    why(format!("`push`: no model named `{name}`; the models: {}", names.join(", ")))
+                })?,
+            };
+            let body = args.get(1).map_or("", String::as_str);
+            if skeleton(model)?.body_index(body).is_none() {
+                return Err(why(format!("`push`: model {model} has no body named `{body}`")));
+            }
+        }
+    }
+    Ok(Bound { actuators, bindings })
+}
+
 impl Character {
     /// Binds `controller` to `world`. `aliases[m]` is the prefix of model m's actuator names in the
     /// controller (`"acrobat"` for `acrobat/hip_l`); with a single model, pass `&[]` and use the
@@ -274,76 +420,10 @@ impl Character {
         procedures: Procedures<BodyEnv>,
         aliases: &[&str],
     ) -> Result<Self, CharacterError> {
-        let n_models = world.n_models();
-        let model_of = |name: &str| aliases.iter().position(|a| *a == name);
-        let mut actuators = Vec::with_capacity(controller.actuators().len());
-        for name in controller.actuators() {
-            let (m, local) = match name.split_once('/') {
-                Some((alias, local)) => {
-                    (model_of(alias).ok_or_else(|| CharacterError::Actuator(name.clone()))?, local)
-                }
-                None => (0, name.as_str()),
-            };
-            let a = world
-                .skeleton(m)?
-                .actuator_index(local)
-                .ok_or_else(|| CharacterError::Actuator(name.clone()))?;
-            actuators.push((m, a));
-        }
-        let mut bindings = Vec::with_capacity(controller.sensors().len());
-        for s in controller.sensors() {
-            let models: Vec<usize> = s.args.iter().filter_map(|a| model_of(a)).collect();
-            let model = models.first().copied().unwrap_or(0);
-            let err = |why: &str| CharacterError::Sensor { name: s.name.clone(), why: why.into() };
-            let side = || side_of(&s.args).ok_or_else(|| err("needs a side, `left` or `right`"));
-            let b = match s.kind.as_str() {
-                "foot_up" => Binding::FootUp { model, side: side()? },
-                "cog_ahead" => Binding::CogAhead { model, side: side()? },
-                "landing" => Binding::Landing {
-                    model,
-                    side: side()?,
-                    combine: if s.args.iter().any(|a| a == "and") {
-                        LandCombine::And
-                    } else {
-                        LandCombine::Or
-                    },
-                },
-                "falling_forward" => Binding::FallingForward { model },
-                "falling_backward" => Binding::FallingBackward { model },
-                "foot_on_hands" => {
-                    let acrobat = model_of("acrobat").unwrap_or(0);
-                    let pusher = model_of("pusher").unwrap_or(1.min(n_models.saturating_sub(1)));
-                    Binding::FootOnHands { acrobat, pusher }
-                }
-                "flip_brake" => Binding::FlipBrake { model },
-                "both_feet_down" => Binding::BothFeetDown { model },
-                "cog_low" => Binding::CogLow { model },
-                "trunk_angle" => {
-                    let joint =
-                        world.skeleton(model)?.joint_index("waist").ok_or_else(|| err("no `waist` joint"))?;
-                    Binding::TrunkAngle { model, joint }
-                }
-                "com_offset" => Binding::ComOffset { model, side: side()? },
-                "com_speed" => Binding::ComSpeed { model },
-                "trunk_rate" => Binding::TrunkRate { model },
-                "ground_slope" => Binding::GroundSlope { model },
-                "com_ahead_of_ankle" => Binding::ComAheadOfAnkle { model, side: side()? },
-                "foot_down" => Binding::FootDown { model, side: side()? },
-                "capture_outside" => Binding::CaptureOutside { model },
-                "never" => Binding::Never,
-                other => return Err(err(&format!("unknown sensor kind `{other}`"))),
-            };
-            bindings.push(b);
-        }
-        for (a, swing) in controller.torso_pairs() {
-            if actuators[a].0 != actuators[swing].0 {
-                let names = controller.actuators();
-                return Err(CharacterError::TorsoAcrossModels {
-                    actuator: names[a].clone(),
-                    swing: names[swing].clone(),
-                });
-            }
-        }
+        let skeletons: Vec<&Skeleton> =
+            (0..world.n_models()).map(|m| world.skeleton(m)).collect::<Result<_, _>>()?;
+        let Bound { actuators, bindings } = bind(&controller, &skeletons, &procedures, aliases)?;
+        let n_models = skeletons.len();
         let sensors = (0..n_models).map(|m| Sensors::new(&world, m)).collect::<Result<Vec<_>, _>>()?;
         let targets = controller.new_targets();
         let mut c = Self {

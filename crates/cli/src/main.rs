@@ -32,8 +32,9 @@ use crate::progress::Bar;
                   column); 2 when a run diverged (it stopped at the first non-finite value and says where).\n\n\
                   Limits (anima_format::limits; larger is refused where it is written): 4000000 particles a \
                   scene, 1e9 steps and 1e6 frames a run, 256 MiB a file, 1e6 m for an object's size or \
-                  position, 1000 bodies or joints a skeleton, 10000 states a controller, 10000 candidates a \
-                  generation, 1000000 evaluations an optimisation, 256 corners an OBJ face."
+                  position, 1000 bodies or joints a skeleton, 10000 states, actuators or sensors a \
+                  controller, 10000 candidates a generation, 1000000 evaluations an optimisation, 256 corners \
+                  an OBJ face."
 )]
 struct Cli {
     #[command(subcommand)]

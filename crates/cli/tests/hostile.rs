@@ -279,7 +279,7 @@ fn limits_are_documented() {
         format!("{} MiB a file", MAX_FILE_BYTES >> 20),
         format!("{MAX_LENGTH_M:e} m for an object's size"),
         format!("{MAX_BODIES} bodies or joints a skeleton"),
-        format!("{MAX_STATES} states a controller"),
+        format!("{MAX_STATES} states, actuators or sensors a controller"),
         format!("{MAX_POPULATION} candidates a generation"),
         format!("{MAX_EVALUATIONS} evaluations an optimisation"),
         format!("{} corners an OBJ face", anima_geom::MAX_FACE_CORNERS),
@@ -440,5 +440,61 @@ fn round_two_values_and_summaries() {
     let o = run(&dir, &sheet, &["--duration", "0.4", "--dt", "0.03", "--integrator", "dopri5"]);
     assert_eq!(o.status.code(), Some(2), "a crawling run stops: {}", String::from_utf8_lossy(&o.stderr));
     assert!(summary(&dir.join("out")).contains("adaptive steps, 100 times the 13 steps"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn controllers_are_checked_against_their_figures_when_read() {
+    let dir = temp_dir("controller-binding");
+    let humanoid = format!("{:?}", assets("skeletons/humanoid.ron"));
+    let thrower = format!("{:?}", assets("skeletons/thrower.ron"));
+    // A scene of the walk or the throw with its controller replaced by `controller` (edited from the
+    // shipped one: `from` → `to`).
+    let scene = |scene: &str, controller: &str, from: &str, to: &str| {
+        let c = edited(&dir, &format!("controllers/{controller}"), from, to, "ctl.ron");
+        assert!(c.exists());
+        let text = std::fs::read_to_string(assets(&format!("scenes/{scene}"))).unwrap();
+        let text = text
+            .replace("\"../skeletons/humanoid.ron\"", &humanoid)
+            .replace("\"../skeletons/thrower.ron\"", &thrower)
+            .replace(&format!("\"../controllers/{controller}\""), "\"ctl.ron\"");
+        let p = dir.join("scene.ron");
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    // A sensor kind the body's catalogue does not compute: at its line of the controller file.
+    let s = scene("walk.ron", "walk-optimised.ron", "kind: \"foot_up\"", "kind: \"foot_upp\"");
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "line 122", "unknown sensor kind `foot_upp`"]);
+    // A sensor without the side it needs.
+    let s = scene(
+        "walk.ron",
+        "walk-optimised.ron",
+        "\"left\",\n                        ],\n                        params: [],\n                    )),\n                    delay: 3.0",
+        "],\n                        params: [],\n                    )),\n                    delay: 3.0",
+    );
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "line 123", "needs a side"]);
+    // Procedure arguments: a count the procedure does not take, a body the figure does not have.
+    let s = scene(
+        "throw.ron",
+        "throw-optimised.ron",
+        "name: \"release_ball\",\n                        args: []",
+        "name: \"release_ball\",\n                        args: [\"now\"]",
+    );
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "line 150", "`release_ball`", "expected 0 arguments"]);
+    let push = "procedure: Some(Call(name: \"push\", args: [\"\", \"tail\", \"10\", \"0\"]))";
+    let s = scene("walk.ron", "walk-optimised.ron", "procedure: None", push);
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "no body named `tail`"]);
+    let push = "procedure: Some(Call(name: \"push\", args: [\"\", \"head\", \"ten\"]))";
+    let s = scene("walk.ron", "walk-optimised.ron", "procedure: None", push);
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "expected 4 arguments"]);
+    let copy = "procedure: Some(Call(name: \"copy_params\", args: [\"W-LEGS/T1/delay\", \"nothing\"]))";
+    let s = scene("walk.ron", "walk-optimised.ron", "procedure: None", copy);
+    refused(&run(&dir, &s, &[]), &["ctl.ron", "`copy_params`", "argument 1", "`nothing`"]);
+    // An optimisation spec's controller is checked against the objective's figure.
+    edited(&dir, "controllers/walk.ron", "kind: \"foot_up\"", "kind: \"foot_upp\"", "walk-bad.ron");
+    let spec =
+        edited(&dir, "optimisations/walk-cmaes.ron", "../controllers/walk.ron", "walk-bad.ron", "spec.ron");
+    let o = anima().args(["optimise", "--out"]).arg(dir.join("opt")).arg(&spec).output().unwrap();
+    refused(&o, &["walk-bad.ron", "unknown sensor kind `foot_upp`"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }

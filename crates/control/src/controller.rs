@@ -16,12 +16,15 @@ use crate::error::ControllerError;
 use crate::io::{Frame, SensorInput, SensorQuery, TargetKind, TargetSignal, Targets};
 use crate::optimise::{Dim, Space};
 use crate::param::{Param, ParamId, ParamInfo, ParamKind, ParamOwner};
-use crate::procedure::{Origin, ProcCtx, Procedures};
+use crate::procedure::{CallArgs, Origin, ProcCtx, Procedures};
 
 /// A sensor the controller queries: one of the sensor set, or a sensory transition's own.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sensor {
     pub name: String,
+    /// Where the file describes it (`sensors[2]`, `machines[0].transitions[1].when`), so that a
+    /// caller that binds it to a body can point at the file's line.
+    pub field: String,
     pub kind: String,
     pub args: Vec<String>,
     /// Its parameters: consecutive ids in the parameter table.
@@ -232,6 +235,8 @@ impl MachineSensor {
 pub(crate) struct Call {
     pub proc: usize,
     pub args: Vec<String>,
+    /// The call's field in the file (`machines[0].states[1].procedure`).
+    pub path: String,
 }
 
 /// Which parameters an optimisation stage may change (spec §7.2): the hierarchical
@@ -350,7 +355,7 @@ impl Builder<'_> {
                 format!("unknown procedure `{}`; registered: {}", call.name, list(self.proc_names)),
             ));
         };
-        self.calls.push(Call { proc, args: call.args.clone() });
+        self.calls.push(Call { proc, args: call.args.clone(), path });
         Ok(Some(self.calls.len() - 1))
     }
 }
@@ -441,18 +446,26 @@ impl Roles {
         &self,
         sensors: &mut Vec<Sensor>,
         name: String,
+        field: String,
         sd: &SensorDesc,
         params: Range<usize>,
     ) -> [usize; 2] {
         let [first, second] = [self.args(&sd.args, 0), self.args(&sd.args, 1)];
         let swapped = first != second;
         let second_name = format!("{name} (roles swapped)");
-        sensors.push(Sensor { name, kind: sd.kind.clone(), args: first, params: params.clone() });
+        let kind = sd.kind.clone();
+        sensors.push(Sensor {
+            name,
+            field: field.clone(),
+            kind: kind.clone(),
+            args: first,
+            params: params.clone(),
+        });
         let id = sensors.len() - 1;
         if !swapped {
             return [id, id];
         }
-        sensors.push(Sensor { name: second_name, kind: sd.kind.clone(), args: second, params });
+        sensors.push(Sensor { name: second_name, field, kind, args: second, params });
         [id, id + 1]
     }
 }
@@ -570,6 +583,7 @@ impl PoseCtx<'_> {
                     let ids = self.roles.sensors(
                         sensors,
                         format!("{label}/k{i}"),
+                        format!("{tpath}.sensor"),
                         &term.sensor,
                         first..b.values.len(),
                     );
@@ -633,12 +647,51 @@ impl Controller {
 
     /// Checks a description and builds the controller.
     pub fn from_desc<E>(desc: ControllerDesc, procedures: &Procedures<E>) -> Result<Self, ControllerError> {
-        Self::build(desc, procedures.names())
+        let c = Self::build(desc, procedures.names())?;
+        c.check_calls(procedures)?;
+        Ok(c)
+    }
+
+    /// Runs each procedure's argument check on the calls that name it (see [`Procedures::register_checked`]).
+    fn check_calls<E>(&self, procedures: &Procedures<E>) -> Result<(), ControllerError> {
+        if self.calls.iter().all(|c| procedures.checks()[c.proc].is_none()) {
+            return Ok(());
+        }
+        // One index of every name a parameter answers to, so that the checks stay linear.
+        let names: HashSet<&str> =
+            self.params.iter().flat_map(|p| [p.path.as_str(), p.label.as_str()]).collect();
+        let is_param = |s: &str| names.contains(s);
+        for call in &self.calls {
+            if let Some(check) = procedures.checks()[call.proc] {
+                check(&CallArgs { args: &call.args, is_param: &is_param }).map_err(|why| {
+                    inv(
+                        format!("{}.args", call.path),
+                        format!("procedure `{}`: {why}", procedures.names()[call.proc]),
+                    )
+                })?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Every procedure call of the file: the procedure's index in the registry the controller was read
+    /// with, its fixed arguments, and its field in the file (for callers that check arguments against
+    /// what they bind, such as the bodies a `push` names).
+    pub fn calls(&self) -> impl Iterator<Item = (usize, &[String], &str)> {
+        self.calls.iter().map(|c| (c.proc, c.args.as_slice(), c.path.as_str()))
     }
 
     fn build(desc: ControllerDesc, proc_names: &[String]) -> Result<Self, ControllerError> {
         let mut b = Builder { params: Vec::new(), values: Vec::new(), calls: Vec::new(), proc_names };
         let mut warnings = Vec::new();
+        for (field, n) in [("actuators", desc.actuators.len()), ("sensors", desc.sensors.len())] {
+            if n > MAX_STATES {
+                let why = format!(
+                    "expected at most {MAX_STATES} {field} in a controller (anima's limit), found {n}"
+                );
+                return Err(inv(field, why));
+            }
+        }
         if let Some((i, n)) = duplicate(desc.actuators.iter().map(String::as_str)) {
             return Err(inv(format!("actuators[{i}]"), format!("a second actuator named `{n}`")));
         }
@@ -691,7 +744,13 @@ impl Controller {
                 s.auto,
             )?;
             let procedure = b.call(&s.procedure, at("procedure"))?;
-            sensors.push(Sensor { name: s.name.clone(), kind: s.kind.clone(), args: s.args.clone(), params });
+            sensors.push(Sensor {
+                name: s.name.clone(),
+                field: format!("sensors[{k}]"),
+                kind: s.kind.clone(),
+                args: s.args.clone(),
+                params,
+            });
             machine_sensors.push(MachineSensor {
                 sensor: k,
                 oscillation_delay: od,
@@ -871,6 +930,7 @@ impl Controller {
                         let ids = roles.sensors(
                             &mut sensors,
                             format!("{}/{name}", md.name),
+                            tat("when"),
                             sd,
                             start..b.values.len(),
                         );

@@ -89,4 +89,4 @@ pub use desc::{
 pub use error::{ControllerError, ControllerErrorKind};
 pub use io::{Frame, SensorInput, SensorQuery, TargetKind, TargetSignal, Targets};
 pub use param::{Param, ParamId, ParamInfo, ParamKind, ParamOwner};
-pub use procedure::{Origin, ProcCtx, ProcedureFn, Procedures};
+pub use procedure::{ArgCheck, CallArgs, Origin, ProcCtx, ProcedureFn, Procedures};

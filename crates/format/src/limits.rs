@@ -32,7 +32,8 @@ pub const MAX_LENGTH_M: f64 = 1e6;
 /// 80 kB per multibody link, so this caps a figure near 100 MB; a crowd belongs in several files.
 pub const MAX_BODIES: usize = 1_000;
 
-/// States of one controller's graph (and transitions out of one state): 10 000.
+/// States of one controller's graph (and transitions out of one state), and its actuators and its
+/// sensors: 10 000 each.
 pub const MAX_STATES: usize = 10_000;
 
 /// Candidates in one generation of an optimiser (CMA-ES's λ, a random search's or annealing's batch):

@@ -3,7 +3,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use anima_body::{BodyScene, Skeleton, SkeletonSource};
+use anima_body::{BodyScene, BuiltinSkeleton, Skeleton, SkeletonSource};
 use anima_cloth::flex3d::FLEX3D_GRAVITY;
 use anima_cloth::oliveira::{BuildError, OliveiraScene, ShapeDesc};
 use anima_control::Controller;
@@ -16,6 +16,7 @@ use crate::body::LoadedBody;
 use crate::character::{CharacterScene, LoadedCharacter};
 use crate::flex3d::LoadedFlex3d;
 use crate::oliveira::LoadedOliveira;
+use crate::optimisation::ObjectiveSpec;
 use crate::optimisation::{LoadedOptimisation, OptimisationSpec};
 use crate::sheet::SheetScene;
 use crate::{SceneError, par};
@@ -270,7 +271,22 @@ pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> 
     if let Some(why) = anima_format::not_a_plain_name(&spec.name) {
         return Err(file.invalid_at(text, "name", format!("expected {why}, found {:?}", spec.name)));
     }
-    let controller = file.controller(&spec.controller)?;
+    let (controller, path, controller_text) = file.controller(&spec.controller)?;
+    // The objective's figure is a built-in skeleton: the controller's actuators, sensors and procedures
+    // are checked against it here, at their lines, rather than at the first evaluation.
+    let skeleton = match spec.objective {
+        ObjectiveSpec::Walk { .. } => BuiltinSkeleton::Humanoid,
+        ObjectiveSpec::Throw { .. } => BuiltinSkeleton::Thrower,
+    }
+    .load();
+    if let Err(e) =
+        anima_character::check_controller(&controller, &[&skeleton], &anima_character::procedures(), &[])
+    {
+        return Err(match e.field_error(&controller_text) {
+            Some(source) => SceneError::Description { path, source },
+            None => file.invalid_at(text, "controller", e.to_string()),
+        });
+    }
     Ok(LoadedOptimisation { spec, controller })
 }
 
@@ -420,11 +436,14 @@ impl File<'_> {
         }
     }
 
-    fn controller(&self, name: &str) -> Result<Controller, SceneError> {
+    /// The controller file `name`, read with the character procedures, with its path and text.
+    fn controller(&self, name: &str) -> Result<(Controller, PathBuf, String), SceneError> {
         let (path, bytes) = self.read("controller file", name)?;
         let text = utf8(&bytes).map_err(|e| SceneError::Parse(e.with_file(path.display().to_string())))?;
-        Controller::from_ron(text, &anima_character::procedures())
-            .map_err(|source| SceneError::Description { path, source })
+        match Controller::from_ron(text, &anima_character::procedures()) {
+            Ok(c) => Ok((c, path, text.to_owned())),
+            Err(source) => Err(SceneError::Description { path, source }),
+        }
     }
 
     fn character(&self, text: &str) -> Result<LoadedCharacter, SceneError> {
@@ -453,7 +472,7 @@ impl File<'_> {
             };
             skeletons.push(sk);
         }
-        let controller = self.controller(&scene.controller)?;
+        let (controller, controller_path, controller_text) = self.controller(&scene.controller)?;
         // Every actuator the controller drives must be one of the models' (`alias/name`, or a model's
         // own name when there is one model): checked here, so a wrong name is an error before the run.
         for name in controller.actuators() {
@@ -468,6 +487,21 @@ impl File<'_> {
                     format!("controller actuator `{name}` names no actuator of the scene's models"),
                 ));
             }
+        }
+        // The sensors' kinds and arguments and the procedures' bodies, checked against the models
+        // here, so that a wrong one is an error at its line of the controller file, before the run.
+        let skeleton_refs: Vec<&Skeleton> = skeletons.iter().collect();
+        let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
+        if let Err(e) = anima_character::check_controller(
+            &controller,
+            &skeleton_refs,
+            &anima_character::procedures(),
+            &aliases,
+        ) {
+            return Err(match e.field_error(&controller_text) {
+                Some(source) => SceneError::Description { path: controller_path, source },
+                None => self.invalid_at(text, "controller", e.to_string()),
+            });
         }
         Ok(LoadedCharacter { scene, skeletons, controller })
     }

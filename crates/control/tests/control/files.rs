@@ -385,3 +385,46 @@ fn states_above_the_limit_are_refused_and_checks_are_linear() {
     // bound for a debug build on a busy machine).
     assert!(took.as_secs_f64() < 10.0, "{took:?}");
 }
+
+#[test]
+fn procedure_arguments_are_checked_when_read() {
+    let with_call = |call: &str| {
+        broken(
+            "State(name: \"E1\", pose: [(\"a\"",
+            &format!("State(name: \"E1\", procedure: Some({call}), pose: [(\"a\""),
+        )
+    };
+    let field = "machines[0].states[0].procedure.args";
+    let e = error(&with_call("Call(name: \"negate_into\")"));
+    check(&e, ControllerErrorKind::Invalid, field, 11, 35, "expected 1 argument");
+    let e = error(&with_call("Call(name: \"negate_into\", args: [\"nowhere\"])"));
+    check(&e, ControllerErrorKind::Invalid, field, 11, 77, "argument 0: expected a parameter");
+    let e = error(&with_call(
+        "Call(name: \"copy_params\", args: [\"machines[0].transitions[1].when.params[0]\"])",
+    ));
+    check(&e, ControllerErrorKind::Invalid, field, 11, 77, "pairs of parameters");
+    let ok = with_call(
+        "Call(name: \"copy_params\", args: [\"machines[0].transitions[1].when.params[0]\", \"machines[0].transitions[1].when.params[0]\"])",
+    );
+    if let Err(e) = Controller::from_ron(&ok, &procedures()) {
+        panic!("a call with two parameters is read: {e}");
+    }
+}
+
+/// Actuators and sensors have the states' limit, checked before anything is built for them.
+#[test]
+fn actuators_and_sensors_above_the_limit_are_refused() {
+    use anima_format::limits::MAX_STATES;
+    let names =
+        |prefix: &str| (0..=MAX_STATES).map(|k| format!("\"{prefix}{k}\"")).collect::<Vec<_>>().join(", ");
+    let text = controller(&[machine("M", 1)])
+        .replace("actuators: [\"a\"]", &format!("actuators: [\"a\", {}]", names("x")));
+    let e = error(&text);
+    check(&e, ControllerErrorKind::Invalid, "actuators", 3, 5, "at most 10000 actuators");
+    let sensors =
+        (0..=MAX_STATES).map(|k| format!("Sensor(name: \"s{k}\", kind: \"never\")")).collect::<Vec<_>>();
+    let text = controller(&[machine("M", 1)])
+        .replace("    machines: [", &format!("    sensors: [{}],\n    machines: [", sensors.join(", ")));
+    let e = error(&text);
+    check(&e, ControllerErrorKind::Invalid, "sensors", 4, 5, "at most 10000 sensors");
+}
