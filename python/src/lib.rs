@@ -8,6 +8,7 @@
 //! its `f64`s as `DVec3`s) straight into the simulator. Simulating releases the GIL.
 
 use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 use anima_control::optimise::{Optimiser, RunLog, resume, run};
 use anima_control::{Controller, ParamId};
@@ -44,6 +45,78 @@ fn scene_error(e: impl std::fmt::Display) -> PyErr {
 
 fn simulation_error(e: anyhow::Error) -> PyErr {
     SimulationError::new_err(format!("{e:#}"))
+}
+
+/// How often a long computation looks for Ctrl-C.
+const POLL: Duration = Duration::from_millis(50);
+
+/// The worker's stack: a character's world steps with the main thread's depth in mind.
+const WORKER_STACK: usize = 16 << 20;
+
+/// Runs `work` to its end without the GIL, answering Ctrl-C: the work runs on a worker thread while
+/// this one looks for a signal every [`POLL`]; at a `KeyboardInterrupt` it asks the work to stop
+/// ([`anima_run::interrupt`]), waits for it to end at its next step or iteration, and raises. (Python
+/// runs its signal handlers on the main thread only, so the thread that called in must be the one
+/// that looks.)
+fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -> PyResult<R> {
+    anima_run::interrupt::clear();
+    std::thread::scope(|s| {
+        let (tx, mut rx) = std::sync::mpsc::channel();
+        let worker = std::thread::Builder::new()
+            .name("anima".into())
+            .stack_size(WORKER_STACK)
+            .spawn_scoped(s, move || {
+                let _ = tx.send(work());
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("starting a worker thread: {e}")))?;
+        loop {
+            let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
+            rx = back;
+            match received {
+                Ok(r) => return Ok(r),
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    // The work panicked: raise it here as Python's PanicException.
+                    match py.detach(|| worker.join()) {
+                        Err(panic) => std::panic::resume_unwind(panic),
+                        Ok(()) => {
+                            return Err(PyRuntimeError::new_err("the worker thread ended without a result"));
+                        }
+                    }
+                }
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                    if let Err(e) = py.check_signals() {
+                        anima_run::interrupt::request();
+                        let _ = py.detach(|| worker.join());
+                        anima_run::interrupt::clear();
+                        return Err(e);
+                    }
+                }
+            }
+        }
+    })
+}
+
+/// Steps `n` times in growing chunks of `run`, each without the GIL, looking for Ctrl-C between
+/// chunks at least every [`POLL`] (a chunk is doubled while it takes less). Interrupted, the state is
+/// that of the last whole step.
+fn stepped<S: Send>(
+    py: Python<'_>,
+    sim: &mut S,
+    n: usize,
+    run: impl Fn(&mut S, usize) -> anyhow::Result<()> + Sync,
+) -> PyResult<()> {
+    let (mut left, mut chunk) = (n, 1usize);
+    while left > 0 {
+        let k = chunk.min(left);
+        let start = Instant::now();
+        py.detach(|| run(&mut *sim, k)).map_err(simulation_error)?;
+        left -= k;
+        if start.elapsed() < POLL / 2 {
+            chunk = chunk.saturating_mul(2);
+        }
+        py.check_signals()?;
+    }
+    Ok(())
 }
 
 fn value_error(e: impl std::fmt::Display) -> PyErr {
@@ -244,16 +317,31 @@ impl Cloth {
     /// Takes `n` steps, the GIL released. Raises `SimulationError` at a non-finite state.
     #[pyo3(signature = (n = 1))]
     fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
-        let sim = &mut self.sim;
-        py.detach(|| sim.run(n)).map_err(simulation_error)
+        stepped(py, &mut self.sim, n, |sim, k| sim.run(k))
     }
 
     /// Steps until the simulated time reaches `t` s (by default the scene's duration).
     #[pyo3(signature = (t = None))]
     fn run(&mut self, py: Python<'_>, t: Option<f64>) -> PyResult<()> {
         let t = t.unwrap_or(self.duration);
+        if !t.is_finite() {
+            return Err(value_error(format!("the time to run to must be finite, found {t}")));
+        }
         let sim = &mut self.sim;
-        py.detach(|| sim.run_until(t)).map_err(simulation_error)
+        // In spans of simulated time, doubled while one takes less than half a poll, each run to its
+        // end without the GIL (the steps are those of one run to `t`), so that Ctrl-C is answered
+        // between them.
+        let mut span = sim.dt().max(1e-9);
+        while sim.time() < t - 1e-12 {
+            let to = t.min(sim.time() + span);
+            let start = Instant::now();
+            py.detach(|| sim.run_until(to)).map_err(simulation_error)?;
+            if start.elapsed() < POLL / 2 {
+                span *= 2.0;
+            }
+            py.check_signals()?;
+        }
+        Ok(())
     }
 
     /// Positions, an `(n, 3)` float64 array (a copy).
@@ -358,8 +446,13 @@ impl Figure {
 
     /// Takes `n` control steps.
     #[pyo3(signature = (n = 1))]
-    fn step(&mut self, n: usize) -> PyResult<()> {
-        self.sim.run(n).map_err(simulation_error)
+    fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
+        // One control step at a time, looking for Ctrl-C after each (a step is milliseconds).
+        for _ in 0..n {
+            self.sim.run(1).map_err(simulation_error)?;
+            py.check_signals()?;
+        }
+        Ok(())
     }
 
     /// Every body's centre and angle, a `(bodies, 3)` float64 array of (x, y, angle about z) in m and
@@ -433,15 +526,14 @@ fn run_json(
         None => RunOptions::quiet(),
     };
     let label = path.display().to_string();
-    let summary = py
-        .detach(|| {
-            let summary = anima_run::run::run(&scene, &label, &opts, &mut Silent)?;
-            if let Some(dir) = &out {
-                anima_run::run::write_summary(&dir.join("summary.json"), &summary)?;
-            }
-            Ok(summary)
-        })
-        .map_err(simulation_error)?;
+    let summary = interruptible(py, || {
+        let summary = anima_run::run::run(&scene, &label, &opts, &mut Silent)?;
+        if let Some(dir) = &out {
+            anima_run::run::write_summary(&dir.join("summary.json"), &summary)?;
+        }
+        Ok(summary)
+    })?
+    .map_err(simulation_error)?;
     serde_json_text(&summary)
 }
 
@@ -458,10 +550,17 @@ fn walk_json(py: Python<'_>, controller: PathBuf, iterations: u64) -> PyResult<S
         .map_err(|e| scene_error(format!("{}: {e}", controller.display())))?;
     let c = Controller::from_ron(&text, &anima_character::procedures())
         .map_err(|e| scene_error(format!("{}: {e}", controller.display())))?;
+    // Bound to the walker here, so that a sensor or a procedure argument the walker cannot answer is
+    // a SceneError at its line of the file, not a failure of the run.
+    let character = anima_run::objectives::humanoid_character(c).map_err(|e| match e.field_error(&text) {
+        Some(located) => scene_error(format!("{}: {located}", controller.display())),
+        None => simulation_error(e.into()),
+    })?;
     let rules = anima_run::objectives::WalkRules::default();
-    let outcome = py
-        .detach(|| anima_run::objectives::walk(c, iterations, &rules, &[], |_| ()))
-        .map_err(|e| simulation_error(e.into()))?;
+    let outcome = interruptible(py, || {
+        anima_run::objectives::walk_character(character, iterations, &rules, &[], |_| ())
+    })?
+    .map_err(|e| simulation_error(e.into()))?;
     #[derive(serde::Serialize)]
     struct Walk {
         #[serde(flatten)]
@@ -491,7 +590,7 @@ impl Evaluator {
         if x.len() != self.ids.len() {
             return Err(value_error(format!("x: expected {} parameters, found {}", self.ids.len(), x.len())));
         }
-        Ok(py.detach(|| anima_run::optimise::fitness(&self.objective, &self.controller, &self.ids, &x)))
+        interruptible(py, || anima_run::optimise::fitness(&self.objective, &self.controller, &self.ids, &x))
     }
 
     #[staticmethod]
@@ -499,6 +598,10 @@ impl Evaluator {
         let objective: ObjectiveSpec = ron::from_str(objective).map_err(scene_error)?;
         let controller =
             Controller::from_ron(controller, &anima_character::procedures()).map_err(scene_error)?;
+        let n = controller.params().len();
+        if let Some(bad) = ids.iter().find(|&&i| i >= n) {
+            return Err(value_error(format!("parameter id {bad}: the controller has {n} parameters")));
+        }
         Ok(Self { objective, controller, ids: ids.into_iter().map(ParamId).collect() })
     }
 
@@ -661,12 +764,28 @@ impl Optimisation {
             )));
         }
         let (opt, log, e) = (&mut self.opt, &mut self.log, &self.evaluator);
-        py.detach(|| {
-            let objective = |x: &[f64]| anima_run::optimise::fitness(&e.objective, &e.controller, &e.ids, x);
+        let ran = interruptible(py, || {
+            // An evaluation cut short by Ctrl-C is no value: NaN makes `run` refuse its generation
+            // whole, so the log holds only generations evaluated to their end.
+            let objective =
+                |x: &[f64]| match anima_run::optimise::fitness(&e.objective, &e.controller, &e.ids, x) {
+                    _ if anima_run::interrupt::requested() => f64::NAN,
+                    f => f,
+                };
             run(opt.as_mut(), &objective, budget, log)
-        })
-        .map_err(value_error)?;
-        Ok(())
+        });
+        match ran {
+            Ok(r) => r.map(|_| ()).map_err(value_error),
+            Err(interrupted) => {
+                // The optimiser asked a generation that was not told: rebuilt and replayed from the log,
+                // it stands where the log ends, and `run()` goes on as if never interrupted.
+                let mut fresh =
+                    anima_run::optimise::optimiser(&self.loaded, &self.evaluator.ids).map_err(value_error)?;
+                resume(fresh.as_mut(), &self.log).map_err(value_error)?;
+                self.opt = fresh;
+                Err(interrupted)
+            }
+        }
     }
 
     /// The best candidate told so far and its fitness, or `None`.

@@ -58,3 +58,20 @@ def test_an_optimisation_log_of_another_spec_is_refused(assets, tmp_path):
     g.save_log(log)
     with pytest.raises(ValueError, match="greedy.log.ron"):
         greedy.resume(log)
+
+
+def test_a_controller_the_walker_cannot_bind_is_a_scene_error_at_its_line(assets, tmp_path):
+    bad = tmp_path / "ctl.ron"
+    text = (assets / "controllers/walk-optimised.ron").read_text()
+    bad.write_text(text.replace('kind: "foot_up"', 'kind: "foot_upp"', 1))
+    wanted = r"ctl\.ron: line 122, column \d+: .*unknown sensor kind `foot_upp`"
+    with pytest.raises(anima.SceneError, match=wanted):
+        anima.walk(bad, iterations=10)
+
+
+def test_an_evaluator_restored_with_ids_its_controller_lacks_is_a_value_error(assets):
+    evaluator = anima.Optimisation(assets / "optimisations/walk-cmaes.ron").evaluator()
+    restore, (objective, ids, controller) = evaluator.__reduce__()
+    assert restore(objective, ids, controller)([0.25] * len(ids)) >= 0.0
+    with pytest.raises(ValueError, match="parameter id 1000000"):
+        restore(objective, [10**6], controller)

@@ -12,6 +12,7 @@
 //! - [`optimise`]: a controller optimisation from a spec file, logged and resumable;
 //! - [`objectives`]: the objectives a spec can name (walking, throwing, the backflip), the figures they
 //!   are measured on, and their trackers, which a character scene's run reports;
+//! - [`interrupt`]: a request from outside (Python's Ctrl-C) that a long computation stop;
 //! - [`drape`]: the Oliveira cloth's drape loop; [`output`]: files written whole (a temporary file, then
 //!   a rename); [`picture`]: the pictures a run writes.
 //!
@@ -36,6 +37,7 @@
 //! ```
 
 pub mod drape;
+pub mod interrupt;
 pub mod objectives;
 pub mod optimise;
 pub mod output;

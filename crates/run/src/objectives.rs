@@ -237,6 +237,10 @@ pub fn walk_character(
 ) -> Result<WalkOutcome, CharacterError> {
     let mut tracker = WalkTracker::new(&c, rules);
     for k in 0..iterations {
+        // Ended early on a stop asked from outside: the caller that asked discards the outcome.
+        if crate::interrupt::requested() {
+            break;
+        }
         apply_pushes(&mut c, pushes, k)?;
         c.step()?;
         observe(&c);
@@ -378,6 +382,10 @@ pub fn throw(
     let mut c = thrower_character(controller)?;
     let mut tracker = ThrowTracker::new(&c, basket)?.expect("the thrower has a ball");
     for _ in 0..max_iterations {
+        // Ended early on a stop asked from outside: the caller that asked discards the outcome.
+        if crate::interrupt::requested() {
+            break;
+        }
         c.step()?;
         observe(&c);
         if tracker.observe(&c) {
@@ -551,6 +559,10 @@ pub fn backflip(
     let mut c = backflip_character(controller, spacing)?;
     let mut tracker = FlipTracker::new(&c).expect("the acrobat has an abdomen and a pelvis");
     for _ in 0..iterations {
+        // Ended early on a stop asked from outside: the caller that asked discards the outcome.
+        if crate::interrupt::requested() {
+            break;
+        }
         c.step()?;
         observe(&c);
         if tracker.observe(&c) {

@@ -348,6 +348,7 @@ fn run_figures<F: Figures>(
         if k % (n_steps / 100).max(1) == 0 {
             progress.advance(k);
         }
+        crate::interrupt::check()?;
         if after_step(figures) {
             break;
         }

@@ -148,6 +148,7 @@ pub fn run(
             failure = Some(e);
             break;
         }
+        crate::interrupt::check()?;
         output.time(|| -> Result<()> {
             write_frame(opts, &world, k)?;
             if let Some(e) = &mut export {

@@ -95,6 +95,10 @@ pub fn run(
             too_long = true;
             return ControlFlow::Break(());
         }
+        if crate::interrupt::requested() {
+            write_error = Some(crate::interrupt::Interrupted.into());
+            return ControlFlow::Break(());
+        }
         min_dt = min_dt.min(report.dt);
         max_dt = max_dt.max(report.dt);
         let t = c.cloth().time();
