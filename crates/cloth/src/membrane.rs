@@ -567,14 +567,28 @@ impl MembraneSim {
         self.stepper.reset_history();
     }
 
+    /// Takes the bounds from the state as it is now (what the first step of [`MembraneSim::run`] does).
+    pub fn restart_bounds(&mut self) {
+        let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
+        self.bounds.restart(x, v, m, self.membrane.gravity, 0.0);
+    }
+
+    /// Checks the state as it is now against the bounds, for a caller that integrates the membrane's
+    /// system itself (an adaptive integrator under its step controller, after
+    /// [`MembraneSim::restart_bounds`]): `step` and `time` are the caller's count and clock, for the
+    /// error.
+    pub fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError> {
+        let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
+        Ok(self.bounds.check(step, time, x, v, m, self.membrane.gravity, std::iter::empty())?)
+    }
+
     /// Takes `n` steps; stops at the first that fails, leaves a non-finite value or leaves the bounds
     /// (checked every step for implicit integrators, every few dozen for explicit ones).
     pub fn run(&mut self, n: usize) -> Result<(), StepError> {
         let every =
             if self.stepper.integrator().is_implicit() { 1 } else { crate::bounds::EXPLICIT_CHECK_EVERY };
         if self.step == 0 {
-            let (x, v, m) = (&self.state.x, &self.state.v, self.membrane.masses());
-            self.bounds.restart(x, v, m, self.membrane.gravity, 0.0);
+            self.restart_bounds();
         }
         for k in 0..n {
             let t = self.time();

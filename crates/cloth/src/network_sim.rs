@@ -355,10 +355,18 @@ impl NetworkSim {
 
     /// Checks the state against the bounds ([`crate::bounds`]).
     fn check_bounds(&self) -> Result<(), OutOfBounds> {
+        self.check_bounds_at(self.step, self.time())
+    }
+
+    /// Checks the state as it is now against the bounds, for a caller that integrates the network
+    /// itself (an adaptive integrator under its step controller, after
+    /// [`NetworkSim::restart_bounds`]): `step` and `time` are the caller's count and clock, for the
+    /// error.
+    pub fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), OutOfBounds> {
         let masses = anima_ode::Linearized::masses(&self.network);
         let springs = self.network.springs().iter().map(|s| (s.i, s.j, s.rest_length));
         let (x, v) = (&self.state.x, &self.state.v);
-        self.bounds.check(self.step, self.time(), x, v, masses, self.network.gravity, springs)
+        self.bounds.check(step, time, x, v, masses, self.network.gravity, springs)
     }
 
     /// One step: integrate, then resolve contacts (or integrate with the contacts constrained inside the

@@ -137,6 +137,9 @@ pub fn run(
         let mut scratch = State::zeros(n);
         let budget = (ADAPTIVE_STEP_BUDGET * n_steps.max(1)) as u64;
         let (mut t, mut h, mut taken, mut evaluations) = (0.0, scene.dt_s, 0u64, 0usize);
+        // The model's own steps are not taken, so its bounds are checked here, once a frame: a divergence
+        // that stays finite ends the run as it does at a fixed step.
+        sim.restart_bounds();
         for k in 1..=n_frames {
             let t_end = if k == n_frames { scene.duration_s } else { k as f64 / scene.frame_rate_hz };
             let control =
@@ -158,10 +161,15 @@ pub fn run(
                     break;
                 }
             }
-            frames = k;
             sim.model_mut().set_state(&state.x, &state.v);
+            if let Err(e) = sim.check_bounds_at(taken, t) {
+                error = Some(e.to_string());
+                break;
+            }
+            frames = k;
             watch.look(sim.model().positions(), &triangles);
             progress.advance(((t / scene.duration_s) * n_steps as f64) as u64);
+            crate::interrupt::check()?;
             output.time(|| {
                 let frame = Frame { k, t, x: sim.model().positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
@@ -195,6 +203,7 @@ pub fn run(
             frames = k;
             watch.look(sim.model().positions(), &triangles);
             progress.advance(sim.model().steps());
+            crate::interrupt::check()?;
             output.time(|| {
                 let frame =
                     Frame { k, t: sim.model().time(), x: sim.model().positions(), triangles: &triangles };
@@ -356,6 +365,22 @@ impl Cloth {
         match self {
             Cloth::Springs(s) => s,
             Cloth::Membrane(m) => m,
+        }
+    }
+
+    /// Takes the bounds from the state as it is now (for a run that integrates the system itself).
+    fn restart_bounds(&mut self) {
+        match self {
+            Cloth::Springs(s) => s.restart_bounds(),
+            Cloth::Membrane(m) => m.restart_bounds(),
+        }
+    }
+
+    /// Checks the state as it is now against the model's bounds, at the caller's step count and time.
+    fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError> {
+        match self {
+            Cloth::Springs(s) => Ok(s.check_bounds_at(step, time)?),
+            Cloth::Membrane(m) => m.check_bounds_at(step, time),
         }
     }
 
