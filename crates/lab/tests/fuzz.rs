@@ -1,12 +1,15 @@
 //! A fuzzing harness for every reader and what a loaded scene builds: hostile inputs get an error,
 //! never a panic, a hang or an unbounded allocation.
 //!
-//! Seeds are every scene file, part and spec under `assets/`, plus `tests/corpus/`: inputs that once
-//! crashed a reader or a run (each kept there for good). Each round takes a seed, mutates it (byte flips,
-//! cut and copied ranges, numbers and names that hostile files use), writes it beside copies of the
-//! assets (so the parts it names resolve), loads it with `anima_scene::load` and, when it loads, builds
-//! and runs it for three steps. A panic fails the test and prints the input that caused it; copy it
-//! into `tests/corpus/` when fixing the cause.
+//! Seeds are every scene file, part and spec under `assets/`, an optimisation's resume log, plus
+//! `tests/corpus/`: inputs that once crashed a reader or a run (each kept there for good). Each round
+//! takes a seed, mutates it (byte flips, cut and copied ranges, numbers and names that hostile files
+//! use), writes it beside copies of the assets (so the parts it names resolve) and reads it as what it
+//! is: a scene is loaded with `anima_scene::load` and, when it loads, built and run for three steps; a
+//! controller is read, bound to the walker and stepped three times; a skeleton is read and placed in a
+//! world; an optimisation spec is loaded and its optimiser built and asked for a generation; a log is
+//! resumed into the spec's optimiser. A panic fails the test and prints the input that caused it; copy
+//! it into `tests/corpus/` when fixing the cause.
 //!
 //! The mutations come from a seeded generator, so a run is repeatable: `ANIMA_FUZZ_ROUNDS` inputs (20 000 by
 //! default, what CI runs: the same inputs on every machine), stopped early after `ANIMA_FUZZ_SECONDS`
@@ -17,6 +20,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use anima_body::{Placement, Skeleton, World, WorldSettings};
+use anima_control::optimise::{RunLog, resume};
 use anima_lab::run::{Overrides, RunOptions, Silent, run};
 use anima_scene::{LoadOptions, load, load_optimisation};
 use rand::{RngExt, SeedableRng};
@@ -150,11 +155,61 @@ fn mutate(rng: &mut ChaCha8Rng, seed: &[u8], other: &[u8]) -> Vec<u8> {
     b
 }
 
-/// Loads `path` and, when it loads, runs it for three steps: `Err` is fine, a panic is not.
+/// The walk-cmaes spec, for the logs.
+const LOG_SPEC: &str = "optimisations/walk-cmaes.ron";
+
+/// A resume log of two generations of `LOG_SPEC`'s optimiser (fitnesses made up: the log's form is
+/// what is fuzzed, not a walk), written as `anima optimise` writes it.
+fn seed_log() -> Vec<u8> {
+    let loaded = load_optimisation(&assets().join(LOG_SPEC)).unwrap();
+    let ids = loaded.controller.free_params(&loaded.spec.parameters);
+    let mut opt = anima_run::optimise::optimiser(&loaded, &ids).unwrap();
+    let mut log = RunLog::default();
+    let objective = |x: &[f64]| x.iter().sum::<f64>();
+    anima_control::optimise::run(opt.as_mut(), &objective, 16, &mut log).unwrap();
+    ron::ser::to_string_pretty(&log, ron::ser::PrettyConfig::default()).unwrap().into_bytes()
+}
+
+/// Reads `path` as what its folder holds and, when it reads, uses it a little: `Err` is fine, a panic
+/// is not.
 fn exercise(path: &Path, out: &Path) {
     let rel = path.to_string_lossy();
+    let text = || std::fs::read(path).ok().and_then(|b| String::from_utf8(b).ok());
+    if rel.ends_with(".log.ron") {
+        let Some(text) = text() else { return };
+        let Ok(log) = ron::from_str::<RunLog>(&text) else { return };
+        let loaded = load_optimisation(&assets().join(LOG_SPEC)).unwrap();
+        let ids = loaded.controller.free_params(&loaded.spec.parameters);
+        let mut opt = anima_run::optimise::optimiser(&loaded, &ids).unwrap();
+        if resume(opt.as_mut(), &log).is_ok() {
+            let _ = opt.ask();
+        }
+        return;
+    }
     if rel.contains("optimisations") {
-        let _ = load_optimisation(path);
+        if let Ok(loaded) = load_optimisation(path) {
+            let ids = loaded.controller.free_params(&loaded.spec.parameters);
+            if let Ok(mut opt) = anima_run::optimise::optimiser(&loaded, &ids) {
+                let _ = opt.ask();
+            }
+        }
+        return;
+    }
+    if rel.contains("controllers") {
+        let Some(text) = text() else { return };
+        let Ok(c) = anima_run::objectives::parse(&text) else { return };
+        let Ok(mut walker) = anima_run::objectives::humanoid_character(c) else { return };
+        for _ in 0..3 {
+            let _ = walker.step();
+        }
+        return;
+    }
+    if rel.contains("skeletons") {
+        let Some(text) = text() else { return };
+        let Ok(sk) = Skeleton::from_ron_str(&text) else { return };
+        if let Ok(mut world) = World::new(WorldSettings::thesis()) {
+            let _ = world.add_model(&sk, Placement::OnGround { dx: 0.0 });
+        }
         return;
     }
     let Ok(mut scene) = load(path, &LoadOptions::default()) else { return };
@@ -198,9 +253,16 @@ fn the_corpus_of_inputs_that_once_crashed_is_refused_or_runs() {
     let dir = scratch_assets("corpus");
     let out = dir.join("out");
     for (name, bytes) in &inputs {
-        // Written where a scene of its kind lives, so that its parts resolve.
-        let place =
-            if name.extension().is_some_and(|e| e.eq_ignore_ascii_case("par")) { "flex3d" } else { "scenes" };
+        // Written where a file of its kind lives, so that its parts resolve: the name's first word says
+        // the kind (`spec-…`, `log-…`, `controller-…`, `skeleton-…`, else a scene).
+        let file = name.file_name().unwrap().to_string_lossy();
+        let place = match file.split('-').next().unwrap_or_default() {
+            _ if name.extension().is_some_and(|e| e.eq_ignore_ascii_case("par")) => "flex3d",
+            "spec" | "log" => "optimisations",
+            "controller" => "controllers",
+            "skeleton" => "skeletons",
+            _ => "scenes",
+        };
         check(&dir.join(place).join(name.file_name().unwrap()), bytes, &out);
     }
     std::fs::remove_dir_all(&dir).unwrap();
@@ -214,6 +276,7 @@ fn mutated_assets_get_errors_not_panics() {
     let seed: u64 = std::env::var("ANIMA_FUZZ_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(1993);
     let mut seeds = Vec::new();
     files(&assets(), Path::new(""), &mut seeds);
+    seeds.push((PathBuf::from("optimisations/walk-cmaes.log.ron"), seed_log()));
     // The big fine-mesh drapes take long to build a few times over; their 5 × 5 forms say the same.
     seeds.retain(|(p, _)| !p.to_string_lossy().contains("17x17"));
     let dir = scratch_assets("mutated");
