@@ -379,9 +379,10 @@ impl RunArgs {
         let reference = match &self.reference {
             Some(p) => {
                 let bytes = anima_scene::read_limited(p)?;
-                let mesh =
-                    anima_geom::read_obj(&bytes[..]).with_context(|| format!("reading {}", p.display()))?;
-                Some(mesh.vertices().to_vec())
+                // Positions only: a frame written without faces, or a point cloud, compares as well.
+                let x = anima_geom::read_obj_positions(&bytes[..])
+                    .with_context(|| format!("reading {}", p.display()))?;
+                Some(x)
             }
             None => None,
         };

@@ -154,6 +154,13 @@ fn standard_sheet_runs_and_compares_with_a_reference() {
     let rk4 = run("c", &["--integrator", "rk4", "--reference", reference.to_str().unwrap()]);
     let d = rk4["rms_to_reference"].as_f64().unwrap();
     assert!(d > 1e-7 && d < 1e-2, "RK4 differs from symplectic Euler by a little: {d}");
+    // Only the positions are compared, so a reference of positions alone (no faces) is read as well.
+    let text = std::fs::read_to_string(&reference).unwrap();
+    let points = dir.join("points.obj");
+    std::fs::write(&points, text.lines().filter(|l| !l.starts_with("f ")).collect::<Vec<_>>().join("\n"))
+        .unwrap();
+    let third = run("d", &["--reference", points.to_str().unwrap()]);
+    assert_eq!(third["rms_to_reference"], second["rms_to_reference"], "{third}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -440,6 +440,24 @@ fn round_two_values_and_summaries() {
     let o = run(&dir, &sheet, &["--duration", "0.4", "--dt", "0.03", "--integrator", "dopri5"]);
     assert_eq!(o.status.code(), Some(2), "a crawling run stops: {}", String::from_utf8_lossy(&o.stderr));
     assert!(summary(&dir.join("out")).contains("adaptive steps, 100 times the 13 steps"));
+    // A physics step too long for the contacts: the figure falls through the ground, finite and quiet,
+    // unless the run looks (it used to end with the head 8.56 m under the ground, exit 0).
+    let text = std::fs::read_to_string(assets("scenes/walk.ron")).unwrap();
+    let long = dir.join("long-step.ron");
+    let humanoid = format!("{:?}", assets("skeletons/humanoid.ron"));
+    let controller = format!("{:?}", assets("controllers/walk-optimised.ron"));
+    std::fs::write(
+        &long,
+        text.replace("dt_s: 0.05", "dt_s: 1.0")
+            .replace("substeps: 4", "substeps: 1")
+            .replace("\"../skeletons/humanoid.ron\"", &humanoid)
+            .replace("\"../controllers/walk-optimised.ron\"", &controller),
+    )
+    .unwrap();
+    let o = run(&dir, &long, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("step 2 (t = 2.0000 s): body `head`") && err.contains("went through it"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -43,7 +43,7 @@ pub use grid_mesh::{DiagonalPattern, MaterialMesh, MaterialMeshError};
 pub use halfedge::{HalfEdges, TopologyError};
 pub use intersect::{Aabb, PreparedTriangle, SegmentHit, segment_triangle};
 pub use mesh::{MeshError, TriangleMesh};
-pub use obj_read::{MAX_FACE_CORNERS, ObjError, read_obj};
+pub use obj_read::{MAX_FACE_CORNERS, ObjError, read_obj, read_obj_positions};
 pub use query::{Cylinder, HalfSpace, MeshSolid, Proximity, Solid, SolidError, Sphere, SurfaceHit};
 /// Self-contact of a cloth with itself: the crossing checker tests and run summaries use to judge any
 /// response (a count of 0 is "never passed through itself"), and the detection a response is built on

@@ -22,6 +22,8 @@ pub enum ObjError {
     IndexOutOfRange { line: usize, column: usize, index: i64, n_vertices: usize },
     #[error("the file has no faces")]
     NoFaces,
+    #[error("the file has no vertices")]
+    NoVertices,
     #[error(transparent)]
     Mesh(#[from] MeshError),
 }
@@ -43,6 +45,43 @@ struct Corner {
 
 /// Reads positions and faces into a validated [`TriangleMesh`].
 pub fn read_obj(r: impl Read) -> Result<TriangleMesh, ObjError> {
+    let (vertices, faces) = read_lines(r, true)?;
+    if faces.is_empty() {
+        return Err(ObjError::NoFaces);
+    }
+    let n = vertices.len();
+    let mut triangles = Vec::with_capacity(faces.len());
+    for face in &faces {
+        let mut tri = [0u32; 3];
+        for (slot, c) in tri.iter_mut().zip(face) {
+            let resolved = if c.index > 0 { c.index - 1 } else { c.n_before as i64 + c.index };
+            if resolved < 0 || resolved as usize >= n {
+                return Err(ObjError::IndexOutOfRange {
+                    line: c.line,
+                    column: c.column,
+                    index: c.index,
+                    n_vertices: n,
+                });
+            }
+            *slot = resolved as u32;
+        }
+        triangles.push(tri);
+    }
+    Ok(TriangleMesh::new(vertices, triangles)?)
+}
+
+/// Reads the vertex positions alone, in file order (a point cloud, or another run's frame to compare
+/// with): faces, and every other line, are skipped unread.
+pub fn read_obj_positions(r: impl Read) -> Result<Vec<DVec3>, ObjError> {
+    let (vertices, _) = read_lines(r, false)?;
+    if vertices.is_empty() {
+        return Err(ObjError::NoVertices);
+    }
+    Ok(vertices)
+}
+
+/// The vertices and (with `faces`) the faces' triangles as written, checked line by line.
+fn read_lines(r: impl Read, want_faces: bool) -> Result<(Vec<DVec3>, Vec<[Corner; 3]>), ObjError> {
     let mut vertices = Vec::new();
     let mut faces: Vec<[Corner; 3]> = Vec::new();
     let mut buf = String::new();
@@ -81,7 +120,7 @@ pub fn read_obj(r: impl Read) -> Result<TriangleMesh, ObjError> {
                 // An optional fourth (w) or colour values may follow; they are ignored.
                 vertices.push(DVec3::from_array(p));
             }
-            "f" => {
+            "f" if want_faces => {
                 let mut corners = Vec::new();
                 for (column, text) in tokens {
                     if corners.len() == MAX_FACE_CORNERS {
@@ -112,28 +151,7 @@ pub fn read_obj(r: impl Read) -> Result<TriangleMesh, ObjError> {
             _ => {} // vn, vt, o, g, s, usemtl, mtllib, l, p, …: not needed for a collision mesh
         }
     }
-    if faces.is_empty() {
-        return Err(ObjError::NoFaces);
-    }
-    let n = vertices.len();
-    let mut triangles = Vec::with_capacity(faces.len());
-    for face in &faces {
-        let mut tri = [0u32; 3];
-        for (slot, c) in tri.iter_mut().zip(face) {
-            let resolved = if c.index > 0 { c.index - 1 } else { c.n_before as i64 + c.index };
-            if resolved < 0 || resolved as usize >= n {
-                return Err(ObjError::IndexOutOfRange {
-                    line: c.line,
-                    column: c.column,
-                    index: c.index,
-                    n_vertices: n,
-                });
-            }
-            *slot = resolved as u32;
-        }
-        triangles.push(tri);
-    }
-    Ok(TriangleMesh::new(vertices, triangles)?)
+    Ok((vertices, faces))
 }
 
 /// Whitespace-separated tokens with their 1-based character columns.

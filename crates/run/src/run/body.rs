@@ -337,6 +337,10 @@ fn run_figures<F: Figures>(
             all_finite &= s.all_finite();
             update_stats(&mut stats[m], s, figures.world().skeleton(m)?, hips[m]);
         }
+        if let Some(why) = through_the_ground(figures.world(), figures.sensors())? {
+            error = Some(format!("step {k} (t = {:.4} s): {why}", k as f64 * settings.dt));
+            break;
+        }
         if out.is_some() && k % frame_every == 0 {
             pictures.time(|| picture(figures.world(), frames.len(), &mut frames))?;
         }
@@ -632,4 +636,34 @@ mod tests {
         assert!(m.min_hip_height_m > 0.98 * m.initial_hip_height_m, "{m:?}");
         assert!(m.max_abs_hip_pitch_rad < 0.02 && m.only_feet_touched, "{m:?}");
     }
+}
+
+/// How far below the ground under it a body's centre may lie, m: more than any body's half-size, so a
+/// centre this deep is a body that went through the ground, not one pressed into it.
+const THROUGH_THE_GROUND_M: f64 = 0.5;
+
+/// The first body whose centre lies more than [`THROUGH_THE_GROUND_M`] under the ground, described,
+/// or `None`. A physics step too long for the contacts lets a falling figure pass through the ground
+/// and sink for ever, finite and quiet (a control step of 1 s once ended a walk with the head 8.56 m
+/// under the ground and no word of it): this ends such a run at the step it happened.
+fn through_the_ground(world: &World, sensors: &[Sensors]) -> Result<Option<String>> {
+    let Some(ground) = world.settings().ground else { return Ok(None) };
+    for (m, s) in sensors.iter().enumerate() {
+        for (b, p) in s.body_position.iter().enumerate() {
+            let depth = ground.height_at(p[0]) - p[1];
+            if depth > THROUGH_THE_GROUND_M {
+                let settings = world.settings();
+                let skeleton = world.skeleton(m)?;
+                return Ok(Some(format!(
+                    "body `{}` of model `{}` is {depth:.2} m under the ground: it went through it. The physics \
+                     step (dt_s / substeps = {:.4} s) is too long for the contacts; use a smaller dt_s or more \
+                     substeps",
+                    skeleton.body(b).name,
+                    skeleton.name(),
+                    settings.dt / f64::from(settings.substeps.max(1)),
+                )));
+            }
+        }
+    }
+    Ok(None)
 }
