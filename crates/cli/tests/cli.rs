@@ -335,10 +335,12 @@ fn adaptive_euler_on_a_fixed_step_scene_is_refused() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
-#[test]
-fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
-    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/optimisations/walk.ron");
-    let (whole, resumed) = (temp_dir("optimise-whole"), temp_dir("optimise-resumed"));
+/// `anima optimise SPEC` run whole and run in two parts (16 evaluations, then on from its log) write
+/// the same log and winner; the winner is the committed `winner` controller, which `cargo xtask
+/// reproduce nunes-walk` writes from the same spec. Returns the log's fitnesses.
+fn optimise_resumes_to_the_committed_walker(spec: &str, name: &str, winner: &str) -> Vec<f64> {
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/optimisations").join(spec);
+    let (whole, resumed) = (temp_dir(&format!("{name}-whole")), temp_dir(&format!("{name}-resumed")));
     let optimise = |out: &Path, extra: &[&str]| {
         let o =
             anima().args(["optimise", "--quiet", "--out"]).arg(out).args(extra).arg(&spec).output().unwrap();
@@ -347,21 +349,45 @@ fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
     optimise(&whole, &[]);
     // Interrupted after 16 evaluations (the start and the 15 global draws), then run again.
     optimise(&resumed, &["--evaluations", "16"]);
-    let partial = std::fs::read_to_string(resumed.join("walk-greedy.log.ron")).unwrap();
+    let (log_file, winner_file) = (format!("{name}.log.ron"), format!("{name}.ron"));
+    let partial = std::fs::read_to_string(resumed.join(&log_file)).unwrap();
     optimise(&resumed, &[]);
-    for file in ["walk-greedy.log.ron", "walk-greedy.ron"] {
+    for file in [&log_file, &winner_file] {
         let (a, b) = (std::fs::read(whole.join(file)).unwrap(), std::fs::read(resumed.join(file)).unwrap());
         assert!(a == b, "{file}: the resumed run differs from the uninterrupted one");
     }
-    let log = std::fs::read_to_string(whole.join("walk-greedy.log.ron")).unwrap();
+    let log = std::fs::read_to_string(whole.join(&log_file)).unwrap();
     assert_eq!(partial.matches("accepted:").count(), 16, "the interrupted run stopped after 16 evaluations");
     assert_eq!(log.matches("accepted:").count(), 46, "46 evaluations");
-    // `cargo xtask reproduce nunes-walk` runs the same spec: its winner is the committed walker.
     let body = |text: &str| text.lines().filter(|l| !l.starts_with("//")).collect::<Vec<_>>().join("\n");
     let committed =
-        std::fs::read_to_string(spec.with_file_name("../controllers/walk-optimised.ron")).unwrap();
-    let found = std::fs::read_to_string(whole.join("walk-greedy.ron")).unwrap();
-    assert_eq!(body(&found), body(&committed), "anima optimise finds the committed optimised walker");
+        std::fs::read_to_string(spec.with_file_name(format!("../controllers/{winner}.ron"))).unwrap();
+    let found = std::fs::read_to_string(whole.join(&winner_file)).unwrap();
+    assert_eq!(body(&found), body(&committed), "anima optimise finds the committed {winner}");
     std::fs::remove_dir_all(&whole).unwrap();
     std::fs::remove_dir_all(&resumed).unwrap();
+    log.lines()
+        .filter_map(|l| l.trim().strip_prefix("fitness: "))
+        .map(|f| f.trim_end_matches(',').parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn the_thesis_walker_optimisation_resumes_from_its_log_to_the_same_result() {
+    let fitness = optimise_resumes_to_the_committed_walker("walk.ron", "walk-greedy", "walk-optimised");
+    assert!(fitness[0] > 0.0, "the experiments' walker (gains × 100) walks before the search");
+}
+
+/// Table 6.3's central result on the faithful walker (gains × 27), from its shipped spec: the
+/// unoptimised walker falls (fitness 0) and the search finds one that walks the 50 s.
+#[test]
+fn the_faithful_walker_falls_before_the_search_and_walks_after_it() {
+    let fitness = optimise_resumes_to_the_committed_walker(
+        "walk-faithful.ron",
+        "walk-faithful",
+        "walk-faithful-optimised",
+    );
+    assert_eq!(fitness[0], 0.0, "the unoptimised faithful walker falls");
+    let best = fitness.iter().copied().fold(0.0, f64::max);
+    assert!(best > 10.0, "after the search it walks (the thesis: 10.5 m in 50 s), found {best} m");
 }

@@ -23,8 +23,12 @@ pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamI
     let mut c = controller.clone();
     c.apply(ids, x);
     match *objective {
-        ObjectiveSpec::Walk { iterations } => {
-            objectives::walk(c, iterations, &objectives::WalkRules::default(), &[], |_| ())
+        ObjectiveSpec::Walk { iterations, actuation } => {
+            let walker = objectives::humanoid_with(c, actuation.unwrap_or_else(objectives::actuation));
+            walker
+                .and_then(|w| {
+                    objectives::walk_character(w, iterations, &objectives::WalkRules::default(), &[], |_| ())
+                })
                 .map_or(0.0, |o| o.fitness())
         }
         ObjectiveSpec::Throw { iterations, height_cap } => {

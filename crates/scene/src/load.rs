@@ -279,6 +279,13 @@ pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> 
         ObjectiveSpec::Throw { .. } => BuiltinSkeleton::Thrower,
     }
     .load();
+    if let ObjectiveSpec::Walk { actuation: Some(a), .. } = spec.objective {
+        skeleton.clone().with_actuation(a).map_err(|e| {
+            file.description(
+                FieldError::invalid(format!("objective.actuation.{}", e.field), e.message).locate(text),
+            )
+        })?;
+    }
     if let Err(e) =
         anima_character::check_controller(&controller, &[&skeleton], &anima_character::procedures(), &[])
     {

@@ -12,8 +12,13 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum ObjectiveSpec {
     /// The walking fitness of spec §7.6 over `iterations` control steps: the distance walked, 0 after a
-    /// fall or a stop.
-    Walk { iterations: u64 },
+    /// fall or a stop. The walker is the humanoid with the experiments' actuation (implicit springs,
+    /// gains × 100), or with `actuation` (the thesis-faithful walker: gains × 27).
+    Walk {
+        iterations: u64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        actuation: Option<anima_body::Actuation>,
+    },
     /// Eq. 6.1 for the thesis's basket over `iterations` control steps; with `height_cap` the height
     /// term counts only up to 0.5 m above the aimed point (anima's reading, which keeps the search off
     /// 12 m throws that miss).
@@ -62,7 +67,7 @@ impl OptimisationSpec {
             Some((field, format!("expected at most {max} {what} (anima's limit), found {found}")))
         };
         let iterations = match self.objective {
-            ObjectiveSpec::Walk { iterations } | ObjectiveSpec::Throw { iterations, .. } => iterations,
+            ObjectiveSpec::Walk { iterations, .. } | ObjectiveSpec::Throw { iterations, .. } => iterations,
         };
         // u64 to f64 rounds, but only far above the limit, where it cannot turn a refusal into a run.
         if iterations as f64 > MAX_STEPS {
