@@ -86,14 +86,17 @@ enum Command {
         #[arg(long)]
         scale: bool,
     },
-    /// Every test: the Rust workspace's, the glTF validator's and the Python package's (pytest, with a
-    /// local Ray cluster). Installs what it needs under target/ (npm's gltf-validator, a Python virtual
-    /// environment). --rust, --gltf, --python run only those parts.
+    /// Every test: the Rust workspace's, the glTF validator's, `anima view` in headless Chromium and the
+    /// Python package's (pytest, with a local Ray cluster). Installs what it needs under target/ (npm's
+    /// gltf-validator, a Python virtual environment) and, as root, Debian's chromium when it is missing.
+    /// --rust, --gltf, --viewer, --python run only those parts.
     Test {
         #[arg(long)]
         rust: bool,
         #[arg(long)]
         gltf: bool,
+        #[arg(long)]
+        viewer: bool,
         #[arg(long)]
         python: bool,
     },
@@ -183,11 +186,16 @@ fn main() -> Result<()> {
             anima_lab::scale::run(&repo, anima_lab::scale::ScaleOptions { quick })
         }
         Command::Bench { quick, only, .. } => bench::run(&repo, quick, only.as_deref()),
-        Command::Test { rust, gltf, python } => {
-            let all = !(rust || gltf || python);
+        Command::Test { rust, gltf, viewer, python } => {
+            let all = !(rust || gltf || viewer || python);
             test::run(
                 repo.root(),
-                test::Parts { rust: rust || all, gltf: gltf || all, python: python || all },
+                test::Parts {
+                    rust: rust || all,
+                    gltf: gltf || all,
+                    viewer: viewer || all,
+                    python: python || all,
+                },
             )
         }
     }

@@ -1,8 +1,10 @@
 //! `cargo xtask test`: every test of the project in one command — the Rust workspace's, the glTF files
-//! checked by the Khronos validator, and the Python package's (pytest, a local Ray cluster among them).
-//! What a fresh machine lacks beyond the Rust toolchain, Python 3 and Node.js it installs under
-//! `target/` (the validator from npm, a virtual environment with the package and its test
-//! dependencies from PyPI), so that nothing outside the checkout changes.
+//! checked by the Khronos validator, `anima view` driven by headless Chromium, and the Python package's
+//! (pytest, a local Ray cluster among them). What a fresh machine lacks beyond the Rust toolchain,
+//! Python 3 and Node.js it installs under `target/` (the validator from npm, a virtual environment with
+//! the package and its test dependencies from PyPI), so that nothing outside the checkout changes;
+//! the one exception is Chromium, a system package, which it installs with apt-get when run as root
+//! and otherwise asks for.
 
 use std::path::Path;
 use std::process::Command;
@@ -21,6 +23,7 @@ const USER_EXAMPLES: [&str; 3] = ["drape_bunny", "sheet_game_loop", "walker"];
 pub struct Parts {
     pub rust: bool,
     pub gltf: bool,
+    pub viewer: bool,
     pub python: bool,
 }
 
@@ -60,6 +63,16 @@ pub fn run(root: &Path, parts: Parts) -> Result<()> {
                 .current_dir(root),
         )?;
     }
+    if parts.viewer {
+        step("Viewer: anima view on a sheet, a remeshed drape and a walk, in headless Chromium");
+        if chromium_ready()? {
+            checked(
+                Command::new(&cargo)
+                    .args(["test", "--workspace", "--release", "viewer_", "--", "--ignored"])
+                    .current_dir(root),
+            )?;
+        }
+    }
     if parts.python {
         step("Python: the package built and installed into target/python, then pytest");
         let venv = target.join("python");
@@ -80,6 +93,36 @@ pub fn run(root: &Path, parts: Parts) -> Result<()> {
     }
     println!("\nall tests passed");
     Ok(())
+}
+
+/// Whether Chromium can run (`ANIMA_CHROMIUM`, or Debian's `chromium`), installing the Debian package
+/// when it is missing and this runs as root with apt-get. Without apt-get the viewer's tests are
+/// skipped with a message; as another user, the message says what to install.
+fn chromium_ready() -> Result<bool> {
+    let program = std::env::var("ANIMA_CHROMIUM").unwrap_or_else(|_| "chromium".to_owned());
+    let runs = |p: &str| Command::new(p).arg("--version").output().is_ok_and(|o| o.status.success());
+    if runs(&program) {
+        return Ok(true);
+    }
+    if !Command::new("apt-get").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        println!(
+            "SKIPPED: no {program} and no apt-get to install it; set ANIMA_CHROMIUM to a Chromium binary"
+        );
+        return Ok(false);
+    }
+    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.starts_with(b"0\n"));
+    if !root {
+        bail!("the viewer's tests need Chromium: `sudo apt-get install chromium` (or set ANIMA_CHROMIUM)");
+    }
+    // The package lists may be empty on a fresh image.
+    checked(Command::new("apt-get").args(["update", "-qq"]))?;
+    checked(
+        Command::new("apt-get")
+            .args(["install", "-y", "-qq", "chromium"])
+            .env("DEBIAN_FRONTEND", "noninteractive"),
+    )
+    .context("installing Debian's chromium")?;
+    Ok(runs(&program))
 }
 
 fn step(what: &str) {

@@ -2,6 +2,7 @@
 
 mod progress;
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -54,6 +55,12 @@ enum Command {
     /// its optimiser and seed. The log is written after every generation and an interrupted run resumes
     /// from it; the best controller is written as RON.
     Optimise(OptimiseArgs),
+    /// Play a finished run in the browser: serves, on 127.0.0.1 only, a page with the run's
+    /// animation.glb (play, pause, a timeline, an orbit camera) and plots of its frames beside it.
+    ///
+    /// The folder is one `anima run SCENE --out DIR --export gltf` wrote; the server only reads it.
+    /// Open the address it prints; Ctrl-C ends it.
+    View(ViewArgs),
     /// Convert a FLEX3D .PAR script to the equivalent anima RON scene.
     Convert {
         /// The .PAR script.
@@ -68,6 +75,15 @@ enum Command {
         #[arg(long, value_parser = parse_gravity)]
         gravity: Option<DVec3>,
     },
+}
+
+#[derive(Debug, clap::Args)]
+struct ViewArgs {
+    /// The run's output folder (with its animation.glb and summary.json).
+    dir: PathBuf,
+    /// The port on 127.0.0.1 (0: any free port; the address is printed).
+    #[arg(long, default_value_t = 8410)]
+    port: u16,
 }
 
 /// A time-stepping method (see `anima_ode::Integrator`).
@@ -654,21 +670,46 @@ fn chain(e: &anyhow::Error) -> String {
     text
 }
 
+/// Serves the run until Ctrl-C, which ends the server (not the process) so that it closes cleanly.
+fn view_command(args: ViewArgs) -> Result<ExitCode> {
+    let server = anima_view::Server::bind(&args.dir, args.port)?;
+    let stopper = server.stopper();
+    ctrlc::set_handler(move || stopper.stop()).context("setting the Ctrl-C handler")?;
+    println!("anima view: http://{}/ (Ctrl-C ends it)", server.local_addr());
+    std::io::stdout().flush()?;
+    server.run().context("serving the run")?;
+    eprintln!("anima view: stopped");
+    Ok(ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    // An interrupt leaves no half-written temporary file behind; every finished file is whole already.
-    let _ = ctrlc::set_handler(|| {
-        anima_run::output::remove_temporaries();
-        eprintln!("\nanima: interrupted");
-        std::process::exit(130);
-    });
     let result = match cli.command {
-        Command::Run(args) => run_command(args),
-        Command::Optimise(args) => optimise_command(args),
-        Command::Convert { input, output, force, gravity } => {
-            convert_command(&input, output, force, gravity).map(|()| ExitCode::SUCCESS)
+        // Ctrl-C ends the server, which then returns.
+        Command::View(args) => view_command(args),
+        command => {
+            // An interrupt leaves no half-written temporary file behind; every finished file is whole
+            // already.
+            let _ = ctrlc::set_handler(|| {
+                anima_run::output::remove_temporaries();
+                eprintln!("\nanima: interrupted");
+                std::process::exit(130);
+            });
+            match command {
+                Command::Run(args) => run_command(args),
+                Command::Optimise(args) => optimise_command(args),
+                Command::Convert { input, output, force, gravity } => {
+                    convert_command(&input, output, force, gravity).map(|()| ExitCode::SUCCESS)
+                }
+                Command::View(args) => view_command(args),
+            }
         }
     };
+    exit_code(result)
+}
+
+/// The exit code of a command's result, its error said on standard error.
+fn exit_code(result: Result<ExitCode>) -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
