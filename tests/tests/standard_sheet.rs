@@ -17,7 +17,9 @@ fn reference_com(n: usize) -> DVec3 {
 fn centre_of_mass_at_the_common_step_is_within_2_mm_of_the_reference() {
     for (n, dt) in [(32usize, 2e-4), (64, 1e-4)] {
         let spec = SheetSpec::standard(n);
-        let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
+        let mut sim =
+            NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::SymplecticEuler, dt)
+                .unwrap();
         sim.run((1.0 / dt).round() as usize).unwrap();
         let com = sim.network.centre_of_mass(&sim.state.x);
         let error = com.distance(reference_com(n));
@@ -28,7 +30,7 @@ fn centre_of_mass_at_the_common_step_is_within_2_mm_of_the_reference() {
 #[test]
 fn standard_sheet_spring_counts() {
     for n in [32usize, 64] {
-        let (s, h, b) = SheetSpec::standard(n).build().spring_counts();
+        let (s, h, b) = SheetSpec::standard(n).build().unwrap().spring_counts();
         assert_eq!((s, h, b), (2 * n * (n - 1), 2 * (n - 1) * (n - 1), 2 * n * (n - 2)), "N = {n}");
     }
 }

@@ -17,7 +17,8 @@ fn folding_sheet(n: usize, x: Option<(&[DVec3], &[DVec3])>, self_collision: bool
         Some((x, _)) => x.to_vec(),
         None => spec.positions().iter().map(|p| DVec3::new(p.x, 0.5 + 0.1 * p.y, 0.65 + p.y)).collect(),
     };
-    let mut sim = NetworkSim::new(spec.build(), start, Integrator::GeneralizedAlpha, 1.0 / 240.0);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), start, Integrator::GeneralizedAlpha, 1.0 / 240.0).unwrap();
     sim.colliders = vec![
         Collider::Sphere { centre: DVec3::new(0.5, 0.45, 0.3), radius: 0.3 },
         Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z },

@@ -219,7 +219,8 @@ pub struct SheetOutcome {
 }
 
 pub fn run_sheet(spec: &SheetSpec, method: &Method, duration: f64) -> SheetOutcome {
-    let mut sim = NetworkSim::new(spec.build(), spec.positions(), method.integrator, method.dt);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), spec.positions(), method.integrator, method.dt).unwrap();
     method.configure(sim.stepper_mut());
     sim.stepper_mut().set_profiling(true);
     let steps = (duration / method.dt).round() as usize;
@@ -265,7 +266,7 @@ pub struct SheetRow {
 pub fn sheet_table(spec: &SheetSpec, methods: &[Method], repeats: usize) -> Result<Vec<SheetRow>, Error> {
     let reference = sheet_reference(spec)?;
     let com_ref = reference_com(spec.n);
-    let net = spec.build();
+    let net = spec.build().unwrap();
     let mut walls: Vec<Vec<f64>> = vec![Vec::new(); methods.len()];
     let mut last: Vec<Option<SheetOutcome>> = vec![None; methods.len()];
     for _ in 0..repeats {
@@ -619,7 +620,7 @@ fn probe_section() -> Result<(), Error> {
     let spec = SheetSpec::standard(64);
     let reference = sheet_reference(&spec)?;
     let com_ref = reference_com(64);
-    let net = spec.build();
+    let net = spec.build().unwrap();
     let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
     let dt = env("DT").unwrap_or(1.0 / 60.0);
     let mut m = Method::new(Integrator::GeneralizedAlpha, dt);

@@ -32,7 +32,7 @@ fn folding_sheet(n: usize, self_collision: bool, from: Option<(&[DVec3], &[DVec3
         Some((x, _)) => x.to_vec(),
         None => spec.positions().iter().map(|p| DVec3::new(p.x, 0.5 + 0.1 * p.y, 0.65 + p.y)).collect(),
     };
-    let mut sim = NetworkSim::new(spec.build(), x, Integrator::GeneralizedAlpha, DT);
+    let mut sim = NetworkSim::new(spec.build().unwrap(), x, Integrator::GeneralizedAlpha, DT).unwrap();
     sim.colliders = vec![
         Collider::Sphere { centre: DVec3::new(0.5, 0.45, 0.3), radius: 0.3 },
         Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z },

@@ -7,10 +7,11 @@ use anima_cloth::spring_net::SheetSpec;
 use anima_ode::Integrator;
 use glam::DVec3;
 
-fn main() -> Result<(), anima_cloth::StepError> {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The standard benchmark sheet (1 m, 0.2 kg) at 32 × 32, pinned at (0, 0) and (31, 0).
     let spec = SheetSpec::standard(32);
-    let mut sheet = NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, 1.0 / 60.0);
+    let mut sheet =
+        NetworkSim::new(spec.build()?, spec.positions(), Integrator::GeneralizedAlpha, 1.0 / 60.0)?;
     let start = sheet.positions().to_vec();
     let n = spec.n;
     for frame in 1..=180 {

@@ -28,7 +28,8 @@
 //! // A 16 × 16 standard sheet, free (no pins), dropped on a sphere at 1/60 s by generalised-α with the
 //! // contacts inside its solve.
 //! let spec = SheetSpec { pinned: vec![], ..SheetSpec::standard(16) };
-//! let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, 1.0 / 60.0);
+//! let network = spec.build().unwrap();
+//! let mut sim = NetworkSim::new(network, spec.positions(), Integrator::GeneralizedAlpha, 1.0 / 60.0).unwrap();
 //! let (centre, radius) = (DVec3::new(0.5, 0.5, 1.0), 0.3);
 //! sim.colliders.push(Collider::Sphere { centre, radius });
 //! sim.friction = 0.3;

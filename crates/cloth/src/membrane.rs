@@ -99,6 +99,8 @@ pub enum MembraneError {
     BadMaterial(&'static str),
     #[error("the surface density must be positive and finite")]
     BadDensity,
+    #[error("the sheet: {0}")]
+    Sheet(String),
 }
 
 /// One triangle's rest shape: the gradient weights g₁, g₂ (rows of D_m⁻¹; g₀ = −g₁ − g₂), its rest area
@@ -686,7 +688,20 @@ impl MembraneSheetSpec {
         out
     }
 
+    /// The membrane; a grid of fewer than 2 × 2 or more than anima's particles, or a pin off the grid,
+    /// is an error.
     pub fn build(&self) -> Result<Membrane, MembraneError> {
+        let n = self.n;
+        let max = anima_format::limits::MAX_PARTICLES;
+        if n < 2 || n.checked_mul(n).is_none_or(|p| p > max) {
+            return Err(MembraneError::Sheet(format!(
+                "expected 2 to {} vertices a side, found {n}",
+                max.isqrt()
+            )));
+        }
+        if let Some((i, j)) = self.pinned.iter().find(|&&(i, j)| i >= n || j >= n) {
+            return Err(MembraneError::Sheet(format!("pin ({i}, {j}) lies outside the {n} × {n} grid")));
+        }
         let mut pinned = vec![false; self.n * self.n];
         for &(i, j) in &self.pinned {
             pinned[j * self.n + i] = true;

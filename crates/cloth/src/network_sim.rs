@@ -17,7 +17,7 @@ use crate::bounds::{Bounds, BoundsWatch, Defaults, OutOfBounds};
 use crate::contact_mode::ContactMode;
 use crate::error::{NonFinite, StepError};
 use crate::self_collision::{OBJECT_ROUNDS, SelfCollision, SelfCollisionResponse, SelfCollisionStats};
-use crate::spring_net::SpringNetwork;
+use crate::spring_net::{NetworkError, SpringNetwork};
 
 /// A static obstacle given analytically.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -191,9 +191,21 @@ pub struct NetworkSim {
 }
 
 impl NetworkSim {
-    pub fn new(network: SpringNetwork, x: Vec<DVec3>, integrator: Integrator, dt: f64) -> Self {
+    /// The network at rest at `x`, stepped by `integrator` at `dt` s. A position count other than the
+    /// network's, or a step that is not positive and finite, is an error.
+    pub fn new(
+        network: SpringNetwork,
+        x: Vec<DVec3>,
+        integrator: Integrator,
+        dt: f64,
+    ) -> Result<Self, NetworkError> {
         let n = network.n_particles();
-        assert_eq!(x.len(), n, "one position per particle");
+        if x.len() != n {
+            return Err(NetworkError::Count { what: "position", n, found: x.len() });
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(NetworkError::Step(dt));
+        }
         let at_rest = vec![DVec3::ZERO; n];
         let masses = anima_ode::Linearized::masses(&network);
         let elastic = network.elastic_energy(&x);
@@ -205,7 +217,7 @@ impl NetworkSim {
             network.gravity,
             elastic,
         );
-        Self {
+        Ok(Self {
             bounds,
             driven: 0.0,
             stepper: Stepper::new(integrator, n),
@@ -228,7 +240,7 @@ impl NetworkSim {
             step: 0,
             dt,
             stats: StepStats::default(),
-        }
+        })
     }
 
     pub fn time(&self) -> f64 {

@@ -68,6 +68,12 @@ pub enum NetworkError {
     BadMass(usize),
     #[error("spring {0} has a negative or non-finite rest length, stiffness or damping")]
     BadSpring(usize),
+    #[error("expected one {what} per particle ({n}), found {found}")]
+    Count { what: &'static str, n: usize, found: usize },
+    #[error("the sheet: {0}")]
+    Sheet(String),
+    #[error("the time step must be positive and finite, found {0} s")]
+    Step(f64),
 }
 
 impl SpringNetwork {
@@ -79,7 +85,9 @@ impl SpringNetwork {
         gravity: DVec3,
     ) -> Result<Self, NetworkError> {
         let n = masses.len();
-        assert_eq!(pinned.len(), n, "one pin flag per particle");
+        if pinned.len() != n {
+            return Err(NetworkError::Count { what: "pin flag", n, found: pinned.len() });
+        }
         if let Some(i) = masses.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
             return Err(NetworkError::BadMass(i));
         }
@@ -454,7 +462,7 @@ impl SheetSpec {
             total_mass: 0.2,
             stiffness: [1000.0, 500.0, 10.0],
             damping: 0.02,
-            pinned: vec![(0, 0), (n - 1, 0)],
+            pinned: vec![(0, 0), (n.saturating_sub(1), 0)],
             gravity: DVec3::new(0.0, 0.0, -9.81),
         }
     }
@@ -484,8 +492,38 @@ impl SheetSpec {
         anima_geom::grid_triangles(self.n, self.n)
     }
 
+    /// Why this sheet cannot be built, or `None`: at least 2 × 2 particles, no more than anima's
+    /// particle limit, a positive size, mass and finite height and gravity, non-negative stiffnesses
+    /// and damping, pins on the grid.
+    pub fn problem(&self) -> Option<String> {
+        let n = self.n;
+        let max = anima_format::limits::MAX_PARTICLES;
+        if n < 2 || n.checked_mul(n).is_none_or(|p| p > max) {
+            return Some(format!("expected 2 to {} particles a side, found {n}", max.isqrt()));
+        }
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !positive(self.size) || !positive(self.total_mass) || !self.height.is_finite() {
+            return Some(format!(
+                "expected a positive size and mass and a finite height, found {} m, {} kg, {} m",
+                self.size, self.total_mass, self.height
+            ));
+        }
+        let ok = |v: f64| v.is_finite() && v >= 0.0;
+        if !self.stiffness.iter().all(|&k| ok(k)) || !ok(self.damping) || !self.gravity.is_finite() {
+            return Some("expected non-negative, finite stiffnesses and damping and a finite gravity".into());
+        }
+        self.pinned
+            .iter()
+            .find(|&&(i, j)| i >= n || j >= n)
+            .map(|(i, j)| format!("pin ({i}, {j}) lies outside the {n} × {n} grid"))
+    }
+
     /// Builds the network: springs at their initial lengths, structural then shear then bend.
-    pub fn build(&self) -> SpringNetwork {
+    /// A sheet that [`SheetSpec::problem`] refuses is an error.
+    pub fn build(&self) -> Result<SpringNetwork, NetworkError> {
+        if let Some(why) = self.problem() {
+            return Err(NetworkError::Sheet(why));
+        }
         let (n, x) = (self.n, self.positions());
         let idx = |i: usize, j: usize| (j * n + i) as u32;
         let mut springs = Vec::new();
@@ -534,8 +572,7 @@ impl SheetSpec {
             pinned[idx(i, j) as usize] = true;
         }
         let m = self.total_mass / (n * n) as f64;
-        let mut net = SpringNetwork::new(vec![m; n * n], springs, pinned, self.gravity)
-            .expect("a grid sheet is well formed");
+        let mut net = SpringNetwork::new(vec![m; n * n], springs, pinned, self.gravity)?;
         let h = self.size / (n - 1) as f64;
         let class = |di: usize, dj_sign: isize, dj: usize, k: f64| StencilClass {
             di,
@@ -558,7 +595,7 @@ impl SheetSpec {
         .filter(|c| c.k > 0.0)
         .collect();
         net.stencil = Some(GridStencil::new(n, classes));
-        net
+        Ok(net)
     }
 }
 
@@ -569,18 +606,47 @@ mod tests {
     #[test]
     fn standard_sheet_has_the_spring_counts_its_definition_implies() {
         for n in [32usize, 64] {
-            let net = SheetSpec::standard(n).build();
+            let net = SheetSpec::standard(n).build().unwrap();
             let expected = (2 * n * (n - 1), 2 * (n - 1) * (n - 1), 2 * n * (n - 2));
             assert_eq!(net.spring_counts(), expected, "N = {n}");
         }
-        assert_eq!(SheetSpec::standard(64).build().springs().len(), 23_938);
+        assert_eq!(SheetSpec::standard(64).build().unwrap().springs().len(), 23_938);
+    }
+
+    #[test]
+    fn a_sheet_that_cannot_be_built_is_an_error_not_a_panic() {
+        for n in [0, 1] {
+            let e = SheetSpec::standard(n).build().unwrap_err();
+            assert!(e.to_string().contains(&format!("particles a side, found {n}")), "{e}");
+        }
+        let off = SheetSpec { pinned: vec![(0, 0), (9, 0)], ..SheetSpec::standard(8) };
+        assert!(off.build().unwrap_err().to_string().contains("pin (9, 0) lies outside the 8 × 8 grid"));
+        let massless = SheetSpec { total_mass: 0.0, ..SheetSpec::standard(8) };
+        assert!(massless.build().is_err());
+        let huge = SheetSpec::standard(1 << 33);
+        assert!(huge.build().is_err(), "refused before anything is allocated");
+        let net = SheetSpec::standard(4).build().unwrap();
+        let wrong = crate::network_sim::NetworkSim::new(
+            net.clone(),
+            vec![DVec3::ZERO; 3],
+            anima_ode::Integrator::Rk4,
+            1e-3,
+        );
+        assert!(wrong.unwrap_err().to_string().contains("one position per particle (16), found 3"));
+        let x = SheetSpec::standard(4).positions();
+        for dt in [0.0, -1.0, f64::NAN] {
+            assert!(
+                crate::network_sim::NetworkSim::new(net.clone(), x.clone(), anima_ode::Integrator::Rk4, dt)
+                    .is_err()
+            );
+        }
     }
 
     #[test]
     fn jacobians_match_finite_differences() {
         // No damping here: its dependence on x is left out of K on purpose (checked through D below).
         let spec = SheetSpec { n: 4, pinned: vec![], damping: 0.0, ..SheetSpec::standard(4) };
-        let mut net = spec.build();
+        let mut net = spec.build().unwrap();
         net.definite_jacobians = false;
         let mut x = spec.positions();
         // Move off the rest state so every spring is stretched or compressed.
@@ -634,7 +700,7 @@ mod system_tests {
     #[test]
     fn fused_system_blocks_equal_the_jacobians_combined() {
         let spec = SheetSpec { n: 5, damping: 0.3, ..SheetSpec::standard(5) };
-        let mut net = spec.build();
+        let mut net = spec.build().unwrap();
         let x: Vec<DVec3> = spec
             .positions()
             .iter()
@@ -672,7 +738,7 @@ mod damping_tests {
     #[test]
     fn damping_jacobian_matches_finite_differences_in_velocity() {
         let spec = SheetSpec { n: 3, pinned: vec![], damping: 0.5, ..SheetSpec::standard(3) };
-        let mut net = spec.build();
+        let mut net = spec.build().unwrap();
         let x = spec.positions();
         let v: Vec<DVec3> = (0..9).map(|k| DVec3::new(0.1 * k as f64, -0.2, 0.05 * k as f64)).collect();
         let mut f = vec![DVec3::ZERO; 9];
@@ -723,7 +789,7 @@ mod stencil_tests {
         // overlapping it) and 20 (blocks and an overlap) particles.
         for n in [5, 9, 20] {
             let spec = SheetSpec::standard(n);
-            let mut fast = spec.build();
+            let mut fast = spec.build().unwrap();
             assert!(fast.stencil.is_some(), "a built sheet takes the stencil path");
             let mut list = fast.clone();
             list.stencil = None;
@@ -761,7 +827,7 @@ mod stencil_tests {
     #[test]
     fn fused_symplectic_euler_gives_the_steppers_bits() {
         let spec = SheetSpec::standard(9);
-        let mut net = spec.build();
+        let mut net = spec.build().unwrap();
         let (x0, v0) = perturbed(&spec);
         let (reference, went) = stepped(&mut net.clone(), 300, 1e-4, &x0, &v0);
         assert_eq!(went, None);
@@ -783,7 +849,7 @@ mod stencil_tests {
     fn fused_symplectic_euler_names_the_step_where_the_state_went_non_finite() {
         // h·ω ≈ 6 on the stiffest springs: the motion grows about fortyfold a step until it overflows.
         let spec = SheetSpec::standard(9);
-        let mut net = spec.build();
+        let mut net = spec.build().unwrap();
         let (x0, v0) = perturbed(&spec);
         let (reference, went) = stepped(&mut net.clone(), 2000, 1e-2, &x0, &v0);
         let went = went.expect("the step is far beyond the stable limit");
@@ -806,7 +872,7 @@ mod stencil_tests {
     fn parallel_fused_symplectic_euler_is_bit_identical_to_serial() {
         // 33 rows: bands of 17 and 16 on two cores, of 9, 9, 9 and 6 on four.
         let spec = SheetSpec::standard(33);
-        let (mut serial, mut parallel) = (spec.build(), spec.build());
+        let (mut serial, mut parallel) = (spec.build().unwrap(), spec.build().unwrap());
         parallel.parallel = true;
         let (x0, v0) = perturbed(&spec);
         let (mut xa, mut va, mut xb, mut vb) = (x0.clone(), v0.clone(), x0, v0);
@@ -824,12 +890,12 @@ mod stencil_tests {
         // Bands of 11 rows (three) and of 9, 9, 9 and 6 (four): the middle bands read halos on both
         // sides, which two bands, all a two-core machine makes, never do.
         let spec = SheetSpec::standard(33);
-        let mut serial = spec.build();
+        let mut serial = spec.build().unwrap();
         let (x0, v0) = perturbed(&spec);
         let (mut xa, mut va) = (x0.clone(), v0.clone());
         assert_eq!(serial.run_symplectic_euler(40, 1e-4, &mut xa, &mut va), Some(Ok(())));
         for count in [3, 4] {
-            let mut banded = spec.build();
+            let mut banded = spec.build().unwrap();
             banded.parallel = true;
             banded.stencil.as_mut().expect("a sheet's stencil").set_bands(count);
             let (mut xb, mut vb) = (x0.clone(), v0.clone());
@@ -841,8 +907,8 @@ mod stencil_tests {
     #[test]
     fn parallel_sheet_forces_are_bit_identical_to_serial() {
         let spec = SheetSpec::standard(33);
-        let mut serial = spec.build();
-        let mut parallel = spec.build();
+        let mut serial = spec.build().unwrap();
+        let mut parallel = spec.build().unwrap();
         parallel.parallel = true;
         let (x, v) = perturbed(&spec);
         let (mut a, mut b) = (vec![DVec3::ZERO; 33 * 33], vec![DVec3::ZERO; 33 * 33]);

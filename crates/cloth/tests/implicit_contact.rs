@@ -24,7 +24,7 @@ fn sheet_on_incline(degrees: f64, mu: f64) -> (NetworkSim, DVec3) {
     let margin = 1e-3;
     let x: Vec<DVec3> =
         spec.positions().iter().map(|p| downhill * p.x + DVec3::Y * p.y + normal * margin).collect();
-    let mut sim = NetworkSim::new(spec.build(), x, Integrator::GeneralizedAlpha, DT);
+    let mut sim = NetworkSim::new(spec.build().unwrap(), x, Integrator::GeneralizedAlpha, DT).unwrap();
     sim.colliders = vec![Collider::Plane { point: DVec3::ZERO, normal }];
     sim.friction = mu;
     sim.margin = margin;
@@ -227,7 +227,9 @@ fn flex3d_surface_rests_on_a_box_with_contact_in_the_solve() {
 fn contact_in_the_solve_is_deterministic() {
     let run = || {
         let spec = SheetSpec { pinned: vec![], ..SheetSpec::standard(12) };
-        let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, DT);
+        let mut sim =
+            NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::GeneralizedAlpha, DT)
+                .unwrap();
         sim.state.v.iter_mut().for_each(|v| *v = DVec3::new(0.3, 0.0, -20.0));
         sim.colliders = vec![
             Collider::Box { min: DVec3::new(0.2, 0.2, 0.0), max: DVec3::new(0.8, 0.8, 1.0) },

@@ -35,7 +35,7 @@ fn very_stiff_sheet() {
     // k = 10⁵ N/m: ten thousand times FLEX3D's k = 10.
     let spec = SheetSpec { n: 16, stiffness: [1e5, 1e5, 10.0], ..SheetSpec::standard(16) };
     for (integrator, _) in METHODS {
-        let sim = NetworkSim::new(spec.build(), spec.positions(), integrator, DT);
+        let sim = NetworkSim::new(spec.build().unwrap(), spec.positions(), integrator, DT).unwrap();
         let sim = assert_bounded(sim, "stiff sheet", 10.0);
         // Stiff springs barely stretch: backward Euler has the sheet hanging at rest at its rest lengths
         // after 2 s; generalised-α, which damps the swing far less, still swings, and its converged
@@ -50,13 +50,13 @@ fn very_stiff_sheet() {
 #[test]
 fn mass_ratio_of_a_thousand_between_neighbours() {
     let spec = SheetSpec::standard(16);
-    let base = spec.build();
+    let base = spec.build().unwrap();
     let masses: Vec<f64> = (0..256).map(|p| if (p % 16 + p / 16) % 2 == 0 { 1e-4 } else { 0.1 }).collect();
     for (integrator, _) in METHODS {
         let net =
             SpringNetwork::new(masses.clone(), base.springs().to_vec(), base.pinned().to_vec(), base.gravity)
                 .unwrap();
-        let sim = NetworkSim::new(net, spec.positions(), integrator, DT);
+        let sim = NetworkSim::new(net, spec.positions(), integrator, DT).unwrap();
         assert_bounded(sim, "mass ratio 1000", 10.0);
     }
 }
@@ -65,7 +65,7 @@ fn mass_ratio_of_a_thousand_between_neighbours() {
 fn sheet_dropped_at_20_m_per_s_onto_a_box() {
     let spec = SheetSpec { pinned: vec![], ..SheetSpec::standard(16) };
     for (integrator, contact) in METHODS {
-        let mut sim = NetworkSim::new(spec.build(), spec.positions(), integrator, DT);
+        let mut sim = NetworkSim::new(spec.build().unwrap(), spec.positions(), integrator, DT).unwrap();
         sim.state.v.iter_mut().for_each(|v| *v = DVec3::new(0.0, 0.0, -20.0));
         let table = Collider::Box { min: DVec3::new(0.2, 0.2, 0.0), max: DVec3::new(0.8, 0.8, 1.0) };
         sim.colliders = vec![table, Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z }];
@@ -86,7 +86,8 @@ fn sheet_dropped_at_20_m_per_s_onto_a_box() {
 #[test]
 fn sheet_dropped_at_20_m_per_s_never_enters_the_box_with_contact_in_the_solve() {
     let spec = SheetSpec { pinned: vec![], ..SheetSpec::standard(16) };
-    let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, DT);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::GeneralizedAlpha, DT).unwrap();
     sim.state.v.iter_mut().for_each(|v| *v = DVec3::new(0.0, 0.0, -20.0));
     let table = Collider::Box { min: DVec3::new(0.2, 0.2, 0.0), max: DVec3::new(0.8, 0.8, 1.0) };
     sim.colliders = vec![table, Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z }];
@@ -111,12 +112,12 @@ fn fully_compressed_row_of_springs() {
         x[8 * 16 + i] = target;
     }
     for (integrator, _) in METHODS {
-        let mut sim = NetworkSim::new(spec.build(), x.clone(), integrator, DT);
+        let mut sim = NetworkSim::new(spec.build().unwrap(), x.clone(), integrator, DT).unwrap();
         if integrator == Integrator::GeneralizedAlpha {
             // Generalised-α's first step out of the collapsed row manufactures some fifty times the
             // energy the row stores (inexact Newton iterations on springs of zero length); its damping
             // takes it out again, but the energy bound calls that step a blow-up, rightly.
-            let mut probe = NetworkSim::new(spec.build(), x.clone(), integrator, DT);
+            let mut probe = NetworkSim::new(spec.build().unwrap(), x.clone(), integrator, DT).unwrap();
             let err = probe.run(1).unwrap_err();
             assert!(
                 err.to_string().contains("bound: energy") && err.to_string().contains("step 1 "),
@@ -131,7 +132,8 @@ fn fully_compressed_row_of_springs() {
 #[test]
 fn implicit_euler_takes_steps_where_explicit_methods_blow_up() {
     let spec = SheetSpec { n: 16, stiffness: [1e5, 1e5, 10.0], ..SheetSpec::standard(16) };
-    let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, DT);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::SymplecticEuler, DT).unwrap();
     assert!(
         sim.run(120).is_err() || sim.state.v.iter().any(|v| v.length() > 1e3),
         "symplectic Euler should diverge at 1/60 s"
@@ -142,7 +144,7 @@ fn implicit_euler_takes_steps_where_explicit_methods_blow_up() {
 fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_percent() {
     // Undamped, so that only the integrator decides stability.
     let spec = SheetSpec { n: 12, damping: 0.0, ..SheetSpec::standard(12) };
-    let mut net = spec.build();
+    let mut net = spec.build().unwrap();
     let x = spec.positions();
     let v = vec![DVec3::ZERO; x.len()];
     let frozen = net.pinned().to_vec();
@@ -150,7 +152,9 @@ fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_perc
     let predicted = stability_limit(Integrator::SymplecticEuler) / omega;
     // Measured: the largest step at which 0.5 s of motion stays slow (bisection on a log scale).
     let stable = |dt: f64| {
-        let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
+        let mut sim =
+            NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::SymplecticEuler, dt)
+                .unwrap();
         sim.run((0.5 / dt) as usize).is_ok() && sim.state.v.iter().all(|v| v.length() < 50.0)
     };
     let (mut lo, mut hi) = (predicted / 4.0, predicted * 4.0);
@@ -170,7 +174,7 @@ fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_perc
 fn gershgorin_bound_lies_above_the_power_iteration_estimate() {
     use anima_ode::OdeSystem;
     let spec = SheetSpec { n: 10, damping: 0.0, ..SheetSpec::standard(10) };
-    let mut net = spec.build();
+    let mut net = spec.build().unwrap();
     let x = spec.positions();
     let v = vec![DVec3::ZERO; x.len()];
     let frozen = net.pinned().to_vec();

@@ -45,8 +45,13 @@ fn the_same_bits_on_one_two_and_four_threads() {
     let sheet = |threads: usize| {
         pool(threads).install(|| {
             let spec = SheetSpec::standard(128);
-            let mut sim =
-                NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, 1.0 / 60.0);
+            let mut sim = NetworkSim::new(
+                spec.build().unwrap(),
+                spec.positions(),
+                Integrator::GeneralizedAlpha,
+                1.0 / 60.0,
+            )
+            .unwrap();
             sim.run(4).unwrap();
             (bits(&sim.state.x), bits(&sim.state.v))
         })
@@ -75,14 +80,16 @@ fn the_same_bits_on_one_two_and_four_threads() {
 fn a_diverging_sheet_is_stopped_by_its_bounds_soon_after_it_leaves_them() {
     let spec = SheetSpec::standard(256);
     let dt = 2.5e-5;
-    let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::SymplecticEuler, dt).unwrap();
     let err = sim.run(40_000).unwrap_err();
     let StepError::Diverged(out) = err else { panic!("expected the bounds to stop it: {err}") };
     assert!(matches!(out.bound, Bound::Speed { .. } | Bound::Strain { .. } | Bound::Energy { .. }));
     assert!(out.to_string().contains("bound:"), "{out}");
     assert!(sim.state.first_non_finite().is_none(), "stopped while finite");
     // The first step out of bounds, checking after every step.
-    let mut single = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
+    let mut single =
+        NetworkSim::new(spec.build().unwrap(), spec.positions(), Integrator::SymplecticEuler, dt).unwrap();
     let first = loop {
         match single.run(1) {
             Ok(()) => continue,

@@ -42,7 +42,7 @@ fn combined(sheets: &[(SheetSpec, Vec<DVec3>)]) -> (SpringNetwork, Vec<DVec3>, V
     let (mut masses, mut springs, mut pinned, mut x, mut triangles) =
         (vec![], vec![], vec![], vec![], vec![]);
     for (spec, positions) in sheets {
-        let net = spec.build();
+        let net = spec.build().unwrap();
         let offset = masses.len() as u32;
         masses.extend_from_slice(net.masses());
         pinned.extend_from_slice(net.pinned());
@@ -66,7 +66,7 @@ fn folding_sheet(integrator: Integrator, dt: f64, contact: ContactMode) -> Netwo
     let spec = SheetSpec { pinned: vec![], height: 1.0, ..SheetSpec::standard(24) };
     // Nearly upright (leaning 0.1 m over its height), its lower edge 5 cm above the sphere's top.
     let x = spec.positions().iter().map(|p| DVec3::new(p.x, 0.5 + 0.1 * p.y, 0.65 + p.y)).collect();
-    let mut sim = NetworkSim::new(spec.build(), x, integrator, dt);
+    let mut sim = NetworkSim::new(spec.build().unwrap(), x, integrator, dt).unwrap();
     sim.colliders = vec![
         Collider::Sphere { centre: DVec3::new(0.5, 0.45, 0.3), radius: 0.3 },
         Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z },
@@ -123,7 +123,8 @@ fn sheet_twisted_two_turns_never_crosses_itself() {
     let spec = SheetSpec { pinned, ..SheetSpec::standard(n) };
     let x = spec.positions();
     let dt = 1.0 / 240.0;
-    let mut sim = NetworkSim::new(spec.build(), x.clone(), Integrator::GeneralizedAlpha, dt);
+    let mut sim =
+        NetworkSim::new(spec.build().unwrap(), x.clone(), Integrator::GeneralizedAlpha, dt).unwrap();
     sim.enable_self_collision(SelfCollision::default(), spec.triangles());
     // The axis runs along y through the sheet's middle; the far edge (j = n − 1) turns about it.
     let axis_point = DVec3::new(0.5 * spec.size, 0.0, spec.height);
@@ -172,7 +173,7 @@ fn stacked_sheets_dropped_on_a_table_never_cross() {
         })
         .collect();
     let (net, x, triangles) = combined(&sheets);
-    let mut sim = NetworkSim::new(net, x, Integrator::GeneralizedAlpha, 1.0 / 240.0);
+    let mut sim = NetworkSim::new(net, x, Integrator::GeneralizedAlpha, 1.0 / 240.0).unwrap();
     sim.colliders = vec![Collider::Box { min: DVec3::new(-1.0, -1.0, 0.0), max: DVec3::new(0.4, 0.4, 0.5) }];
     sim.friction = 0.4;
     sim.contact = ContactMode::InSolve;
@@ -192,7 +193,7 @@ fn sheet_thrown_at_20_m_s_into_a_draped_sheet_never_crosses() {
     let small_x: Vec<DVec3> = small.positions().iter().map(|p| start(*p)).collect();
     let (net, x, triangles) = combined(&[(big.clone(), big.positions()), (small, small_x)]);
     let dt = 1.0 / 240.0;
-    let mut sim = NetworkSim::new(net, x, Integrator::GeneralizedAlpha, dt);
+    let mut sim = NetworkSim::new(net, x, Integrator::GeneralizedAlpha, dt).unwrap();
     let sphere = DVec3::new(0.5, 0.5, 0.5);
     sim.colliders = vec![Collider::Sphere { centre: sphere, radius: 0.3 }];
     sim.friction = 0.3;

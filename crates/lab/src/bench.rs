@@ -89,13 +89,13 @@ fn run_sheet_from(
     control: StepControl,
     configure: &dyn Fn(&mut Stepper<DVec3>),
 ) -> Option<(Vec<DVec3>, f64)> {
-    let net = scene.spec.build();
+    let net = scene.spec.build().ok()?;
     let n = net.n_particles();
     let dt = match control {
         StepControl::Constant { dt } => dt,
         StepControl::Adaptive { dt_initial, .. } => dt_initial,
     };
-    let mut sim = NetworkSim::new(net, start, integrator, dt);
+    let mut sim = NetworkSim::new(net, start, integrator, dt).ok()?;
     configure(sim.stepper_mut());
     let start = Instant::now();
     let ok = match control {
@@ -165,7 +165,7 @@ fn measure(
     x: &[DVec3],
     reference: &[DVec3],
 ) -> Point {
-    let com = scene.spec.build().centre_of_mass(x);
+    let com = scene.spec.build().expect("a benchmark sheet is valid").centre_of_mass(x);
     let com_error = scene.com_reference.map_or(f64::NAN, |r| com.distance(r));
     Point { knob, seconds, seconds_range, error: rms(x, reference), com_error }
 }
@@ -508,7 +508,7 @@ fn run_single(repo: &Repo, quick: bool, only: Option<&str>) -> Result<()> {
         let (curves, _) = sheet_curves(repo, scene, quick)?;
         let png = format!("bench-{}.png", scene.name);
         repo.write_figure(&png, &plot(&scene.title, &curves, "RMS position error (m)")?)?;
-        let (m, k) = scene.spec.build().stiffest();
+        let (m, k) = scene.spec.build()?.stiffest();
         let _ = write!(
             doc,
             "## {}\n\nThe sheet of `benchmarks.md` ({} particles, pinned at two corners, 1 s); particle mass {m:.3e} kg, \
@@ -632,7 +632,7 @@ fn sensitivity_section(repo: &Repo, scenes: &[BenchSheet]) -> Result<String> {
         let common = if n <= 32 { 2e-4 } else { 1e-4 };
         eprintln!("anima-lab: sensitivity of {} …", scene.name);
         let reference = reference(repo, scene)?;
-        let net = scene.spec.build();
+        let net = scene.spec.build()?;
         for (integrator, dt) in [
             (Integrator::SymplecticEuler, common),
             (Integrator::Rk4, common),
@@ -673,7 +673,7 @@ const CONVERGED_CG_TOLERANCE: f64 = 1e-7;
 fn converged_alpha_table(repo: &Repo, scenes: &[BenchSheet]) -> Result<String> {
     let Some(scene) = scenes.iter().find(|s| s.spec.n == 64) else { return Ok(String::new()) };
     let reference = reference(repo, scene)?;
-    let net = scene.spec.build();
+    let net = scene.spec.build()?;
     let mut out = format!(
         "Generalised-α's error on the N = 64 sheet with each step solved to convergence ({CONVERGED_NEWTON} \
          Newton iterations, CG with rigid aggregation to a relative residual of {CONVERGED_CG_TOLERANCE:.0e}), \
@@ -764,7 +764,7 @@ fn stability_map(repo: &Repo) -> Result<String> {
     for k in [100.0, 1000.0, 1e4] {
         let spec =
             SheetSpec { n: 16, damping: 0.0, stiffness: [k, k / 2.0, 10.0], ..SheetSpec::standard(16) };
-        let mut net = spec.build();
+        let mut net = spec.build()?;
         let x = spec.positions();
         let frozen = net.pinned().to_vec();
         let omega = max_frequency(&mut net, 0.0, &x, &vec![DVec3::ZERO; x.len()], &frozen, 200);

@@ -62,7 +62,7 @@ fn folded_drape() -> Result<Image> {
     let mut tiles = Vec::new();
     for response in [true, false] {
         let x = spec.positions().iter().map(|p| DVec3::new(p.x, 0.5 + 0.1 * p.y, 0.65 + p.y)).collect();
-        let mut sim = NetworkSim::new(spec.build(), x, Integrator::GeneralizedAlpha, 1.0 / 240.0);
+        let mut sim = NetworkSim::new(spec.build()?, x, Integrator::GeneralizedAlpha, 1.0 / 240.0)?;
         sim.colliders = vec![
             Collider::Sphere { centre: sphere.centre, radius: sphere.radius },
             Collider::Plane { point: DVec3::ZERO, normal: DVec3::Z },

@@ -69,7 +69,7 @@ struct SheetRun {
 /// The standard sheet N × N, 1 s at 1/60 s by generalised-α.
 fn sheet_run(n: usize) -> Result<SheetRun> {
     let spec = SheetSpec::standard(n);
-    let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::GeneralizedAlpha, DT);
+    let mut sim = NetworkSim::new(spec.build()?, spec.positions(), Integrator::GeneralizedAlpha, DT)?;
     sim.stepper_mut().set_profiling(true);
     let steps = 60;
     let started = Instant::now();
@@ -685,7 +685,7 @@ fn stability_section(sheets: &[usize]) -> Result<String> {
     );
     for &n in sheets.iter().chain(std::iter::once(&32)).collect::<std::collections::BTreeSet<_>>() {
         let spec = SheetSpec::standard(n);
-        let mut net = spec.build();
+        let mut net = spec.build()?;
         let x = spec.positions();
         let frozen = net.pinned().to_vec();
         let (omega, zeta) = anima_ode::stability::max_frequency_and_damping(
@@ -698,7 +698,12 @@ fn stability_section(sheets: &[usize]) -> Result<String> {
         );
         let limit = anima_ode::stability::damped_stability_limit(Integrator::SymplecticEuler, zeta) / omega;
         let stable = |dt: f64| {
-            let mut sim = NetworkSim::new(spec.build(), spec.positions(), Integrator::SymplecticEuler, dt);
+            let Ok(mut sim) = spec
+                .build()
+                .and_then(|net| NetworkSim::new(net, spec.positions(), Integrator::SymplecticEuler, dt))
+            else {
+                return false;
+            };
             sim.run((0.2 / dt).round() as usize).is_ok()
         };
         let (mut lo, mut hi) = (0.5 * limit, 2.0 * limit);

@@ -66,11 +66,11 @@ impl Model {
         Ok(match self {
             Model::StandardSprings => {
                 let spec = SheetSpec::standard(n);
-                (Box::new(spec.build()), spec.positions())
+                (Box::new(spec.build()?), spec.positions())
             }
             Model::OliveiraSprings => {
                 let spec = SheetSpec::oliveira_cloth(n);
-                (Box::new(spec.build()), spec.positions())
+                (Box::new(spec.build()?), spec.positions())
             }
             Model::Membrane => {
                 let spec = MembraneSheetSpec::standard(n);
