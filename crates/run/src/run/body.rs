@@ -16,6 +16,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 use super::export::GltfExport;
+use super::series::FrameSeries;
 use super::{Detail, OutputClock, Progress, RunOptions, Summary};
 use crate::objectives::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
@@ -320,6 +321,24 @@ fn run_figures<F: Figures>(
         }
         None => None,
     };
+    // Frame by frame, per model: the pelvis's height and speed and the contacts (series.json, when the
+    // run writes output), at the pictures' frames.
+    let mut series = match &opts.out_dir {
+        Some(_) => {
+            let mut names = Vec::new();
+            for m in 0..n_models {
+                let prefix =
+                    if n_models > 1 { format!("{} ", world.skeleton(m)?.name()) } else { String::new() };
+                names.push((format!("{prefix}pelvis height"), "m"));
+                names.push((format!("{prefix}pelvis speed"), "m/s"));
+                names.push((format!("{prefix}contacts"), "count"));
+            }
+            let mut f = FrameSeries::new(names);
+            f.push(world.time(), &frame_values(figures.sensors(), &hips));
+            Some(f)
+        }
+        None => None,
+    };
     let mut all_finite = true;
     let mut error = None;
     let mut pictures = OutputClock::default();
@@ -349,6 +368,11 @@ fn run_figures<F: Figures>(
         {
             e.figure_frame((k / frame_every) as usize, figures.world())?;
         }
+        if let Some(f) = &mut series
+            && k % frame_every == 0
+        {
+            f.push(figures.world().time(), &frame_values(figures.sensors(), &hips));
+        }
         if k % (n_steps / 100).max(1) == 0 {
             progress.advance(k);
         }
@@ -363,6 +387,9 @@ fn run_figures<F: Figures>(
     let sim_seconds = (wall_seconds - picture_seconds).max(1e-12);
     let mut warnings = Vec::new();
     super::closing_warnings(export, opts, None, progress, &mut warnings)?;
+    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
+        f.write(dir)?;
+    }
     if let Some(dir) = out
         && let Some(last) = frames.last()
     {
@@ -392,6 +419,18 @@ fn run_figures<F: Figures>(
             evaluation: None,
         }),
     })
+}
+
+/// Each model's pelvis height (m) and speed (m/s) and its number of contacts, as the series list them.
+fn frame_values(sensors: &[Sensors], hips: &[(usize, [f64; 2])]) -> Vec<Option<f64>> {
+    sensors
+        .iter()
+        .zip(hips)
+        .flat_map(|(s, &(pelvis, _))| {
+            let [vx, vy] = s.body_velocity[pelvis];
+            [Some(s.body_position[pelvis][1]), Some(vx.hypot(vy)), Some(s.contacts.len() as f64)]
+        })
+        .collect()
 }
 
 fn update_stats(st: &mut ModelSummary, s: &Sensors, sk: &Skeleton, hip: (usize, [f64; 2])) {
@@ -555,6 +594,36 @@ pub fn draw_ground(img: &mut Image, view: &View2d, ground: &Ground) {
     fill_polygon(img, &pts, GROUND);
 }
 
+/// How far below the ground under it a body's centre may lie, m: more than any body's half-size, so a
+/// centre this deep is a body that went through the ground, not one pressed into it.
+const THROUGH_THE_GROUND_M: f64 = 0.5;
+
+/// The first body whose centre lies more than [`THROUGH_THE_GROUND_M`] under the ground, described,
+/// or `None`. A physics step too long for the contacts lets a falling figure pass through the ground
+/// and sink for ever, finite and quiet (a control step of 1 s once ended a walk with the head 8.56 m
+/// under the ground and no word of it): this ends such a run at the step it happened.
+fn through_the_ground(world: &World, sensors: &[Sensors]) -> Result<Option<String>> {
+    let Some(ground) = world.settings().ground else { return Ok(None) };
+    for (m, s) in sensors.iter().enumerate() {
+        for (b, p) in s.body_position.iter().enumerate() {
+            let depth = ground.height_at(p[0]) - p[1];
+            if depth > THROUGH_THE_GROUND_M {
+                let settings = world.settings();
+                let skeleton = world.skeleton(m)?;
+                return Ok(Some(format!(
+                    "body `{}` of model `{}` is {depth:.2} m under the ground: it went through it. The physics \
+                     step (dt_s / substeps = {:.4} s) is too long for the contacts; use a smaller dt_s or more \
+                     substeps",
+                    skeleton.body(b).name,
+                    skeleton.name(),
+                    settings.dt / f64::from(settings.substeps.max(1)),
+                )));
+            }
+        }
+    }
+    Ok(None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -636,34 +705,4 @@ mod tests {
         assert!(m.min_hip_height_m > 0.98 * m.initial_hip_height_m, "{m:?}");
         assert!(m.max_abs_hip_pitch_rad < 0.02 && m.only_feet_touched, "{m:?}");
     }
-}
-
-/// How far below the ground under it a body's centre may lie, m: more than any body's half-size, so a
-/// centre this deep is a body that went through the ground, not one pressed into it.
-const THROUGH_THE_GROUND_M: f64 = 0.5;
-
-/// The first body whose centre lies more than [`THROUGH_THE_GROUND_M`] under the ground, described,
-/// or `None`. A physics step too long for the contacts lets a falling figure pass through the ground
-/// and sink for ever, finite and quiet (a control step of 1 s once ended a walk with the head 8.56 m
-/// under the ground and no word of it): this ends such a run at the step it happened.
-fn through_the_ground(world: &World, sensors: &[Sensors]) -> Result<Option<String>> {
-    let Some(ground) = world.settings().ground else { return Ok(None) };
-    for (m, s) in sensors.iter().enumerate() {
-        for (b, p) in s.body_position.iter().enumerate() {
-            let depth = ground.height_at(p[0]) - p[1];
-            if depth > THROUGH_THE_GROUND_M {
-                let settings = world.settings();
-                let skeleton = world.skeleton(m)?;
-                return Ok(Some(format!(
-                    "body `{}` of model `{}` is {depth:.2} m under the ground: it went through it. The physics \
-                     step (dt_s / substeps = {:.4} s) is too long for the contacts; use a smaller dt_s or more \
-                     substeps",
-                    skeleton.body(b).name,
-                    skeleton.name(),
-                    settings.dt / f64::from(settings.substeps.max(1)),
-                )));
-            }
-        }
-    }
-    Ok(None)
 }

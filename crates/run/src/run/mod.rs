@@ -6,6 +6,7 @@ pub mod body;
 pub mod export;
 pub mod flex3d;
 pub mod oliveira;
+pub mod series;
 pub mod sheet;
 
 use std::path::{Path, PathBuf};
@@ -211,15 +212,21 @@ pub(crate) struct CrossingWatch {
 impl CrossingWatch {
     /// Counts the crossings of the state, within the count's work budget
     /// ([`anima_geom::count_self_intersections_within`]): a mesh that blew up is not walked for minutes.
-    pub fn look(&mut self, x: &[DVec3], triangles: &[[u32; 3]]) {
+    /// Returns the count, or `None` when it was abandoned.
+    pub fn look(&mut self, x: &[DVec3], triangles: &[[u32; 3]]) -> Option<usize> {
         let started = std::time::Instant::now();
-        match anima_geom::count_self_intersections_within(x, triangles, None) {
-            Ok(n) => self.largest = self.largest.max(n),
+        let count = match anima_geom::count_self_intersections_within(x, triangles, None) {
+            Ok(n) => {
+                self.largest = self.largest.max(n);
+                Some(n)
+            }
             Err(e) => {
                 self.abandoned.get_or_insert_with(|| e.to_string());
+                None
             }
-        }
+        };
         self.spent += started.elapsed();
+        count
     }
 
     /// The warning for the summary when a count was abandoned.
@@ -302,8 +309,9 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
 
 /// Runs a loaded scene of any kind; `label` names it in the summary. The output folder is checked
 /// writable first, and the frames an earlier run of the same kind left there are removed (with a
-/// warning), so the folder holds this run's frames only; so is an earlier `animation.glb`, whatever
-/// its kind, since it shows an earlier run (this run writes its own at its end when it exports).
+/// warning), so the folder holds this run's frames only; so is an earlier `animation.glb` or
+/// `series.json`, whatever its kind, since it shows an earlier run (this run writes its own at its end
+/// when it exports, or keeps series).
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
     if let Some(dir) = &opts.out_dir {
         crate::output::check_writable(dir)?;
@@ -319,7 +327,7 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
                 Scene::Oliveira(_) => frame(name, "cloth_", ".obj"),
                 Scene::Body(_) | Scene::Character(_) => frame(name, "frame_", ".png"),
             };
-            frame_file || name == export::GLTF_FILE || name == export::USD_FILE
+            frame_file || name == export::GLTF_FILE || name == export::USD_FILE || name == series::SERIES_FILE
         };
         let removed = crate::output::remove_stale(dir, ours)?;
         if removed > 0 {

@@ -17,6 +17,7 @@ use anyhow::{Result, bail};
 use serde::Serialize;
 
 use super::export::GltfExport;
+use super::series::FrameSeries;
 use super::{
     CrossingWatch, Detail, OutputClock, Progress, RunOptions, Summary, sheet_frames, stability_warning,
 };
@@ -119,6 +120,18 @@ pub fn run(
         }
         None => None,
     };
+    // Frame by frame, what the summary reports at the end (series.json, when the run writes output);
+    // frame 0's crossings are counted here, before the clock starts, and not in the summary's largest.
+    let mut series = opts.out_dir.as_ref().map(|_| {
+        let mut f = FrameSeries::new([
+            ("kinetic energy".to_owned(), "J"),
+            ("self-intersections".to_owned(), "crossing pairs"),
+        ]);
+        let crossings =
+            anima_geom::count_self_intersections_within(sim.model().positions(), &triangles, None);
+        f.push(0.0, &[Some(kinetic_energy(&sim, scene)), crossings.ok().map(|c| c as f64)]);
+        f
+    });
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
@@ -167,7 +180,10 @@ pub fn run(
                 break;
             }
             frames = k;
-            watch.look(sim.model().positions(), &triangles);
+            let crossings = watch.look(sim.model().positions(), &triangles);
+            if let Some(f) = &mut series {
+                output.time(|| f.push(t, &[Some(kinetic_energy(&sim, scene)), crossings.map(|c| c as f64)]));
+            }
             progress.advance(((t / scene.duration_s) * n_steps as f64) as u64);
             crate::interrupt::check()?;
             output.time(|| {
@@ -201,7 +217,11 @@ pub fn run(
                 break;
             }
             frames = k;
-            watch.look(sim.model().positions(), &triangles);
+            let crossings = watch.look(sim.model().positions(), &triangles);
+            if let Some(f) = &mut series {
+                let t = sim.model().time();
+                output.time(|| f.push(t, &[Some(kinetic_energy(&sim, scene)), crossings.map(|c| c as f64)]));
+            }
             progress.advance(sim.model().steps());
             crate::interrupt::check()?;
             output.time(|| {
@@ -248,20 +268,15 @@ pub fn run(
             }),
             max_strain: sim.max_strain(x),
             max_speed: sim.model().velocities().iter().map(|v| v.length()).fold(0.0, f64::max),
-            kinetic_energy: match &sim {
-                // Equal particles: ½ (M/n) Σ v².
-                Cloth::Springs(s) => {
-                    0.5 * scene.sheet.total_mass / n as f64
-                        * s.state.v.iter().map(|v| v.length_squared()).sum::<f64>()
-                }
-                // A third of each triangle's mass at each corner.
-                Cloth::Membrane(m) => m.membrane.kinetic_energy(&m.state.v),
-            },
+            kinetic_energy: kinetic_energy(&sim, scene),
             solver_iterations: sim.solver_iterations(),
         }),
     };
     if let Some(dir) = &opts.out_dir {
         write_atomic(&dir.join("final.obj"), |w| Ok(write_obj(w, "sheet", x, &triangles)?))?;
+    }
+    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
+        f.write(dir)?;
     }
     if let Some(dir) = opts.picture_dir() {
         write_pictures(dir, x, sim.model().time(), &snapshots, &triangles)?;
@@ -273,6 +288,20 @@ pub fn run(
 /// `dt_s`), but not without bound: a sheet the step controller crawls through is stopped past this
 /// multiple of `duration_s / dt_s` accepted steps, with a message saying so.
 const ADAPTIVE_STEP_BUDGET: usize = 100;
+
+/// The sheet's kinetic energy now, J.
+fn kinetic_energy(sim: &Cloth, scene: &SheetScene) -> f64 {
+    let n = scene.sheet.n * scene.sheet.n;
+    match sim {
+        // Equal particles: ½ (M/n) Σ v².
+        Cloth::Springs(s) => {
+            0.5 * scene.sheet.total_mass / n as f64
+                * s.state.v.iter().map(|v| v.length_squared()).sum::<f64>()
+        }
+        // A third of each triangle's mass at each corner.
+        Cloth::Membrane(m) => m.membrane.kinetic_energy(&m.state.v),
+    }
+}
 
 /// One output frame of a sheet run: written as OBJ, added to the glTF export, and kept for the
 /// pictures when `snapshot` is given.
@@ -321,13 +350,13 @@ impl Cloth {
         let sheet = &scene.sheet;
         Ok(match scene.model {
             SheetModel::Springs => {
-                let mut net = sheet.build();
+                let mut net = sheet.build()?;
                 // The implicit steps evaluate their forces with the system, spring by spring, on one
                 // thread.
                 net.parallel = parallel
                     && sheet.n * sheet.n >= super::parallel_min_particles(scene.integrator)
                     && !scene.integrator.is_implicit();
-                let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s);
+                let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s)?;
                 (Cloth::Springs(Box::new(sim)), grid_triangles(sheet.n, sheet.n))
             }
             SheetModel::Membrane(material) => {
