@@ -310,6 +310,8 @@ fn viewer_plays_a_sheet_and_shows_the_frame_scrubbed_to() {
     let k = 12;
     let result = self_test(&viewer.url, &dir.join("profile"), k);
     assert_eq!(result["frames"], 31);
+    // The run's own per-frame series, plotted.
+    assert_eq!(result["plots"], serde_json::json!(["kinetic energy", "self-intersections"]));
     assert_shows_obj(&result, &out.join(format!("sheet_{k}.obj")));
     let run_frame = obj_positions(&out.join(format!("sheet_{k}.obj")));
     // Frame k is not frame 1: the scrub moved the cloth.
@@ -373,6 +375,7 @@ fn viewer_plays_a_walk_and_shows_the_frame_scrubbed_to() {
     assert_eq!(result["frames"], track.len());
     let links = result["shown"]["links"].as_array().unwrap();
     assert_eq!(links.len(), 14, "the walker's 14 links");
+    assert_eq!(result["plots"], serde_json::json!(["pelvis height", "pelvis speed", "contacts"]));
     let shown =
         links.iter().find(|l| l["name"] == "pelvis" && l["root"] == true).expect("the pelvis, a root");
     for a in 0..3 {

@@ -244,8 +244,8 @@ function drawPlot({ canvas, s }) {
   const ts = plotted.time_s;
   const vs = s.values;
   const finite = vs.filter(Number.isFinite);
-  let lo = Math.min(...finite);
-  let hi = Math.max(...finite);
+  let lo = finite.length > 0 ? Math.min(...finite) : 0;
+  let hi = finite.length > 0 ? Math.max(...finite) : 1;
   if (!(hi > lo)) {
     lo -= 0.5;
     hi += 0.5;
@@ -270,7 +270,18 @@ function drawPlot({ canvas, s }) {
   g.strokeStyle = '#2a6fb0';
   g.lineWidth = 1.5;
   g.beginPath();
-  vs.forEach((v, k) => (k === 0 ? g.moveTo(x(ts[k]), y(v)) : g.lineTo(x(ts[k]), y(v))));
+  // A missing value (null: not had at that frame) breaks the line.
+  let drawing = false;
+  vs.forEach((v, k) => {
+    if (!Number.isFinite(v)) {
+      drawing = false;
+    } else if (drawing) {
+      g.lineTo(x(ts[k]), y(v));
+    } else {
+      g.moveTo(x(ts[k]), y(v));
+      drawing = true;
+    }
+  });
   g.stroke();
   g.strokeStyle = '#c33';
   g.beginPath();
@@ -432,7 +443,8 @@ if (query.has('test')) {
   slider.value = String(k);
   slider.dispatchEvent(new Event('input'));
   await sleep(200);
-  const result = { errors, frames: times.length, played, seen: [...seenPlaying], ticks, playing, frame: frameAt(time), shown: shown() };
+  const plotNames = plotted.series.map((p) => p.name);
+  const result = { errors, frames: times.length, played, seen: [...seenPlaying], ticks, plots: plotNames, playing, frame: frameAt(time), shown: shown() };
   $('result').textContent = JSON.stringify(result);
   document.title = 'anima view: tested';
 }
