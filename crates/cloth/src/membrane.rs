@@ -101,6 +101,10 @@ pub enum MembraneError {
     BadDensity,
     #[error("the sheet: {0}")]
     Sheet(String),
+    #[error("expected one {what} per vertex ({n}), found {found}")]
+    Count { what: &'static str, n: usize, found: usize },
+    #[error("the time step must be positive and finite, found {0} s")]
+    Step(f64),
 }
 
 /// One triangle's rest shape: the gradient weights g₁, g₂ (rows of D_m⁻¹; g₀ = −g₁ − g₂), its rest area
@@ -162,7 +166,9 @@ impl Membrane {
         gravity: DVec3,
     ) -> Result<Self, MembraneError> {
         let n = rest.len();
-        assert_eq!(pinned.len(), n, "one pin flag per vertex");
+        if pinned.len() != n {
+            return Err(MembraneError::Count { what: "pin flag", n, found: pinned.len() });
+        }
         let m = material;
         if !(m.young_thickness.is_finite() && m.young_thickness >= 0.0) {
             return Err(MembraneError::BadMaterial("E·t must be finite and non-negative"));
@@ -512,14 +518,25 @@ pub struct MembraneSim {
 }
 
 impl MembraneSim {
-    /// At rest at `x`.
-    pub fn new(membrane: Membrane, x: Vec<DVec3>, integrator: Integrator, dt: f64) -> Self {
+    /// At rest at `x`; a position count other than the membrane's, or a step that is not positive and
+    /// finite, is an error.
+    pub fn new(
+        membrane: Membrane,
+        x: Vec<DVec3>,
+        integrator: Integrator,
+        dt: f64,
+    ) -> Result<Self, MembraneError> {
         let n = x.len();
-        assert_eq!(n, membrane.n_vertices(), "one position per vertex");
+        if n != membrane.n_vertices() {
+            return Err(MembraneError::Count { what: "position", n: membrane.n_vertices(), found: n });
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(MembraneError::Step(dt));
+        }
         let state = State::new(x, vec![DVec3::ZERO; n]);
         let defaults = Defaults::passive(membrane.gravity);
         let bounds = BoundsWatch::new(defaults, &state.x, &state.v, membrane.masses(), membrane.gravity, 0.0);
-        Self {
+        Ok(Self {
             bounds,
             membrane,
             stepper: Stepper::new(integrator, n),
@@ -528,7 +545,7 @@ impl MembraneSim {
             dt,
             step: 0,
             solver_iterations: 0,
-        }
+        })
     }
 
     pub fn stepper_mut(&mut self) -> &mut Stepper<DVec3> {
@@ -894,7 +911,7 @@ mod tests {
             DVec3::new(0.0, 0.0, -g),
         )
         .unwrap();
-        let mut sim = MembraneSim::new(m, rest.clone(), Integrator::ImplicitEuler, 0.02);
+        let mut sim = MembraneSim::new(m, rest.clone(), Integrator::ImplicitEuler, 0.02).unwrap();
         sim.stepper_mut().set_linear_solver(anima_ode::LinearSolver::SparseCholesky);
         sim.run(300).unwrap();
         let drop: f64 = (n * (n - 1)..n * n).map(|p| rest[p].z - sim.state.x[p].z).sum::<f64>() / n as f64;

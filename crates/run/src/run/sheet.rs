@@ -369,7 +369,7 @@ impl Cloth {
                     pinned: sheet.pinned.clone(),
                     gravity: sheet.gravity,
                 };
-                let sim = MembraneSim::new(spec.build()?, spec.positions(), scene.integrator, scene.dt_s);
+                let sim = MembraneSim::new(spec.build()?, spec.positions(), scene.integrator, scene.dt_s)?;
                 (Cloth::Membrane(Box::new(sim)), spec.triangles())
             }
         })
