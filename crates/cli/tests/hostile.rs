@@ -440,6 +440,15 @@ fn round_two_values_and_summaries() {
     let o = run(&dir, &sheet, &["--duration", "0.4", "--dt", "0.03", "--integrator", "dopri5"]);
     assert_eq!(o.status.code(), Some(2), "a crawling run stops: {}", String::from_utf8_lossy(&o.stderr));
     assert!(summary(&dir.join("out")).contains("adaptive steps, 100 times the 13 steps"));
+    // A sizing field whose finest mesh would pass the particle limit is refused where it is written.
+    let fine = edited(
+        &dir,
+        "oliveira/test-2-table-adaptive.ron",
+        "remesher: Oliveira(test: 2, short_edge: MinLength, interval_s: 0.001)",
+        "remesher: SizingField(min_edge_m: 1e-12, interval_s: 0.001)",
+        "fine.ron",
+    );
+    refused(&run(&dir, &fine, &[]), &["fine.ron", "line 51", "remesher.min_edge_m", "4000000 particles"]);
     // A physics step too long for the contacts: the figure falls through the ground, finite and quiet,
     // unless the run looks (it used to end with the head 8.56 m under the ground, exit 0).
     let text = std::fs::read_to_string(assets("scenes/walk.ron")).unwrap();

@@ -190,6 +190,21 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
         Some("AdaptiveOliveiraScene") => {
             let a = crate::oliveira::adaptive_from_ron_str(text).map_err(parse)?;
             a.remesher.method().map_err(|why| file.invalid_at(text, "remesher", why))?;
+            // A sizing field refines down to its shortest edge: a triangle mesh of edges e over the
+            // cloth's area A has about 1.2·A/e² vertices, held to anima's particle limit here (with a
+            // margin) rather than met as an allocation that aborts.
+            if let crate::oliveira::Remesher::SizingField { min_edge_m, .. } = a.remesher {
+                let size = a.drape.cloth.size_m;
+                let shortest = size * (2.0 / crate::limits::MAX_PARTICLES as f64).sqrt();
+                if min_edge_m < shortest {
+                    let why = format!(
+                        "expected a shortest edge of at least {shortest:.3e} m for a {size} m cloth (its finest \
+                         mesh would pass anima's {} particles), found {min_edge_m:e}",
+                        crate::limits::MAX_PARTICLES
+                    );
+                    return Err(file.invalid_at(text, "remesher.min_edge_m", why));
+                }
+            }
             let loaded = LoadedOliveira {
                 meshes: file.obj_meshes(&a.drape)?,
                 scene: a.drape,
