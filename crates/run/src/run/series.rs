@@ -57,3 +57,70 @@ impl FrameSeries {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::{Path, PathBuf};
+
+    use anima_scene::{LoadOptions, Scene};
+    use serde_json::Value;
+
+    use crate::run::{Detail, Overrides, RunOptions, Silent, run};
+
+    fn scene(rel: &str, duration_s: f64) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets").join(rel);
+        let mut scene = anima_scene::load(&path, &LoadOptions::default()).unwrap();
+        Overrides { duration: Some(duration_s), ..Overrides::default() }.apply(&mut scene).unwrap();
+        scene
+    }
+
+    fn temp_dir(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("anima-series-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    }
+
+    fn values(series: &Value, name: &str) -> Vec<f64> {
+        let s = series["series"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
+        s["values"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
+    }
+
+    #[test]
+    fn a_sheet_run_writes_a_value_per_frame_from_frame_0_that_ends_where_the_summary_does() {
+        let dir = temp_dir("sheet");
+        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
+        let summary = run(&scene("scenes/standard-sheet-32.ron", 0.2), "t", &opts, &mut Silent).unwrap();
+        let series: Value =
+            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let t: Vec<f64> = series["time_s"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        assert_eq!(t.len(), summary.frames + 1, "frame 0 and every frame");
+        assert_eq!((t[0], *t.last().unwrap()), (0.0, summary.simulated_seconds));
+        let energy = values(&series, "kinetic energy");
+        let Detail::Sheet(d) = &summary.detail else { panic!("a sheet") };
+        assert_eq!((energy[0], *energy.last().unwrap()), (0.0, d.kinetic_energy));
+        let crossings = values(&series, "self-intersections");
+        assert_eq!(crossings.len(), t.len());
+        assert_eq!(
+            crossings[1..].iter().copied().fold(0.0, f64::max),
+            summary.self_intersections.unwrap() as f64
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_walk_writes_the_pelvis_and_contacts_at_each_picture_frame() {
+        let dir = temp_dir("walk");
+        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
+        run(&scene("scenes/walk.ron", 2.0), "t", &opts, &mut Silent).unwrap();
+        let series: Value =
+            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let t = series["time_s"].as_array().unwrap();
+        // The walk's frames are 0.5 s apart: 0, 0.5, …, 2.
+        assert_eq!(t.len(), 5, "{series}");
+        let height = values(&series, "pelvis height");
+        assert!(height.iter().all(|h| (0.8..1.1).contains(h)), "{height:?}");
+        assert!(values(&series, "pelvis speed")[4] > 0.5, "walking");
+        assert!(values(&series, "contacts")[1..].iter().all(|&c| c >= 1.0), "a foot on the ground");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
