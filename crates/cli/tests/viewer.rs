@@ -340,6 +340,8 @@ fn viewer_shows_a_remeshed_cloths_changing_mesh() {
     for k in [1, 6] {
         let result = self_test(&viewer.url, &profile, k);
         assert_shows_obj(&result, &out.join(format!("cloth_{k}.obj")));
+        let plots = ["kinetic energy", "self-intersections", "vertices", "contact responses (total)"];
+        assert_eq!(result["plots"], serde_json::json!(plots));
     }
     viewer.interrupt();
     std::fs::remove_dir_all(&dir).unwrap();

@@ -7,7 +7,7 @@ use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
 
-use anima_cloth::oliveira::AdaptiveCloth;
+use anima_cloth::oliveira::{AdaptiveCloth, OliveiraCloth};
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3};
 use anima_scene::oliveira::LoadedOliveira;
@@ -17,6 +17,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use super::export::GltfExport;
+use super::series::FrameSeries;
 use super::{
     CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
 };
@@ -86,6 +87,20 @@ pub fn run(
     let mut write_error = None;
     let mut watch = CrossingWatch::default();
     let mut output = OutputClock::default();
+    // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
+    // before the clock starts, and not in the summary's largest.
+    let mut series = opts.out_dir.as_ref().map(|_| {
+        let mut f = FrameSeries::new([
+            ("kinetic energy".to_owned(), "J"),
+            ("self-intersections".to_owned(), "crossing pairs"),
+            ("vertices".to_owned(), "count"),
+            ("contact responses (total)".to_owned(), "count"),
+        ]);
+        let c = cloth.cloth();
+        let crossings = anima_geom::count_self_intersections_within(c.positions(), c.triangles(), None);
+        f.push(0.0, &frame_values(c, crossings.ok()));
+        f
+    });
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
     let mut too_long = false;
@@ -119,7 +134,10 @@ pub fn run(
                 write_error = Some(e);
                 return ControlFlow::Break(());
             }
-            watch.look(c.cloth().positions(), c.cloth().triangles());
+            let crossings = watch.look(c.cloth().positions(), c.cloth().triangles());
+            if let Some(f) = &mut series {
+                f.push(frame_time(next_frame), &frame_values(c.cloth(), crossings));
+            }
             progress.advance((t * 1e3) as u64);
             next_frame += 1;
         }
@@ -181,7 +199,21 @@ pub fn run(
     if let Some(dir) = opts.picture_dir() {
         write_pictures(dir, &cloth, &kept)?;
     }
+    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
+        f.write(dir)?;
+    }
     Ok(summary)
+}
+
+/// A frame's values in the order of the run's series: kinetic energy, crossings (`None`: the count was
+/// abandoned), vertices, contact responses so far.
+fn frame_values(c: &OliveiraCloth, crossings: Option<usize>) -> [Option<f64>; 4] {
+    [
+        Some(c.kinetic_energy()),
+        crossings.map(|n| n as f64),
+        Some(c.positions().len() as f64),
+        Some(c.total_hits() as f64),
+    ]
 }
 
 /// The export of a drape, with frame 0 in it: the cloth over its objects, as morph targets when no

@@ -108,6 +108,30 @@ mod tests {
     }
 
     #[test]
+    fn a_remeshed_drape_writes_its_energy_crossings_and_vertex_count_per_frame() {
+        let dir = temp_dir("drape");
+        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
+        let scene = scene("oliveira/test-2-table-adaptive.ron", 0.1);
+        let summary = run(&scene, "t", &opts, &mut Silent).unwrap();
+        let series: Value =
+            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let Detail::Oliveira(d) = &summary.detail else { panic!("a drape") };
+        let vertices = values(&series, "vertices");
+        assert_eq!(vertices.len(), summary.frames + 1);
+        assert_eq!(
+            (vertices[0], *vertices.last().unwrap()),
+            (d.particles_at_start as f64, d.particles as f64)
+        );
+        assert_eq!(*values(&series, "kinetic energy").last().unwrap(), d.kinetic_energy);
+        let crossings = values(&series, "self-intersections");
+        assert_eq!(
+            crossings[1..].iter().copied().fold(0.0, f64::max),
+            summary.self_intersections.unwrap() as f64
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn a_walk_writes_the_pelvis_and_contacts_at_each_picture_frame() {
         let dir = temp_dir("walk");
         let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
