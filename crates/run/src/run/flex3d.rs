@@ -13,6 +13,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use super::export::GltfExport;
+use super::series::FrameSeries;
 use super::{
     CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
     stability_warning,
@@ -142,6 +143,19 @@ pub fn run(
     let triangles = world.all_triangles();
     let mut watch = CrossingWatch::default();
     let mut output = OutputClock::default();
+    // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
+    // before the clock starts, and not in the summary's largest.
+    let mut series = opts.out_dir.as_ref().map(|_| {
+        let mut f = FrameSeries::new([
+            ("kinetic energy".to_owned(), "J"),
+            ("self-intersections".to_owned(), "crossing pairs"),
+            ("max speed".to_owned(), "m/s"),
+        ]);
+        let crossings = anima_geom::count_self_intersections_within(world.positions(), &triangles, None);
+        let d = world.diagnostics();
+        f.push(world.time(), &[Some(d.kinetic_energy), crossings.ok().map(|n| n as f64), Some(d.max_speed)]);
+        f
+    });
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target as u64, progress) {
@@ -163,8 +177,11 @@ pub fn run(
             }
             Ok(())
         })?;
-        watch.look(world.positions(), &triangles);
+        let crossings = watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
+        if let Some(f) = &mut series {
+            f.push(world.time(), &[Some(d.kinetic_energy), crossings.map(|n| n as f64), Some(d.max_speed)]);
+        }
         frame_stats.push(FrameStats {
             frame: k,
             time: world.time(),
@@ -220,6 +237,9 @@ pub fn run(
     };
     if let Some(dir) = opts.picture_dir() {
         crate::picture::write_pictures(dir, &world, &snapshots)?;
+    }
+    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
+        f.write(dir)?;
     }
     Ok((summary, world))
 }

@@ -132,6 +132,21 @@ mod tests {
     }
 
     #[test]
+    fn a_flex3d_run_writes_its_energy_and_crossings_per_frame() {
+        let dir = temp_dir("flex3d");
+        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
+        let summary = run(&scene("flex3d/curtain.ron", 0.2), "t", &opts, &mut Silent).unwrap();
+        let series: Value =
+            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let Detail::Flex3d(d) = &summary.detail else { panic!("a FLEX3D scene") };
+        let energy = values(&series, "kinetic energy");
+        assert_eq!(energy.len(), summary.frames + 1);
+        assert_eq!(*energy.last().unwrap(), d.kinetic_energy);
+        assert_eq!(values(&series, "self-intersections").len(), energy.len());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn a_walk_writes_the_pelvis_and_contacts_at_each_picture_frame() {
         let dir = temp_dir("walk");
         let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
