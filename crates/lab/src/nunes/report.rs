@@ -150,7 +150,8 @@ fn walk(repo: &Repo) -> Result<String> {
     repo.write_text("assets/controllers/walk-optimised.ron", &text)?;
 
     let mut s = String::from("## Walking (spec §8.1, Table 6.3)\n\n");
-    s.push_str(&walk_faithful(repo)?);
+    let (faithful, faithful_winner) = walk_faithful(repo)?;
+    s.push_str(&faithful);
     s.push_str("### The experiments' walker (gains × 100)\n\n");
     s.push_str(
         "The walker of anima's other walking experiments (variants, pushes, optimisers, robustness): the same \
@@ -192,7 +193,7 @@ fn walk(repo: &Repo) -> Result<String> {
         .collect();
     let _ = writeln!(s, "\nAccepted fitnesses in order: {}.", accepted.join(", "));
     s.push_str(&walk_variants(repo)?);
-    s.push_str(&walk_protected()?);
+    s.push_str(&walk_protected(&faithful_winner)?);
     Ok(s)
 }
 
@@ -213,12 +214,13 @@ struct Fall {
 const PUSH_AT: u64 = 200;
 const AFTER_PUSH: u64 = 80;
 
-fn pushed_walk(controller: Controller, impulse: f64) -> Result<Fall> {
+fn pushed_walk(controller: Controller, impulse: f64, actuation: Option<Actuation>) -> Result<Fall> {
     let push = nunes::Push::impulse(impulse, PUSH_AT, 2);
     let rules = WalkRules { window: 0, stop_on_failure: false, ..WalkRules::default() };
     let (mut protected, mut first_down, mut head_down) = (None, None, false);
     let mut k = 0u64;
-    let out = nunes::walk(controller, PUSH_AT + AFTER_PUSH, &rules, &[push], |c| {
+    let walker = nunes::humanoid_with(controller, actuation.unwrap_or_else(nunes::actuation))?;
+    let out = nunes::walk_character(walker, PUSH_AT + AFTER_PUSH, &rules, &[push], |c| {
         k += 1;
         if k <= PUSH_AT {
             return;
@@ -249,7 +251,10 @@ fn pushed_walk(controller: Controller, impulse: f64) -> Result<Fall> {
 
 /// Variant C (spec §8.1.9) on the humanoid: `walk-protected.ron` beside `walk.ron` under pushes on
 /// the head, forward (from behind) and backward, measured by which body meets the ground first.
-fn walk_protected() -> Result<String> {
+///
+/// On both walkers: the faithful one (gains × 27) with the thresholds its search found, `faithful` (by
+/// label; unoptimised it falls before any push), and the experiments' (× 100) as shipped.
+fn walk_protected(faithful: &[(String, f64)]) -> Result<String> {
     let mut s = String::from("\n### Variant C under head pushes (spec §8.1.9)\n\n");
     let _ = writeln!(
         s,
@@ -260,47 +265,61 @@ fn walk_protected() -> Result<String> {
          same walker plus PROTECT-FWD and PROTECT-BACK with the spec's proposed tolerances, hold-off, \
          weight and poses) walk {:.0} s, are pushed on the head for 0.1 s, and run {:.0} s more; the table \
          gives the first body other than a foot to touch the ground (and when, after the push began), \
-         whether the head touched at all, and the protective machine that ran.\n",
+         whether the head touched at all, and the protective machine that ran. Both walkers: the faithful one \
+         (gains × 27) with the thresholds its search found (set in both controllers), and the experiments' \
+         (× 100) as shipped.\n",
         PUSH_AT as f64 * nunes::DT,
         AFTER_PUSH as f64 * nunes::DT
     );
     s.push_str(
-        "| push on the head (N·s) | controller | falls | first body down (s after the push) | head on the ground | protective machine (s after the push) |\n\
-         |---|---|---|---|---|---|\n",
+        "| walker | push on the head (N·s) | controller | falls | first body down (s after the push) | head on the ground | protective machine (s after the push) |\n\
+         |---|---|---|---|---|---|---|\n",
     );
     let seconds = |k: u64| format!("{:.2}", k as f64 * nunes::DT);
-    let mut protected_heads = [0usize; 2];
-    let mut bare_heads = [0usize; 2];
-    let mut falls = [0usize; 2];
-    for impulse in [60.0, 100.0, 150.0, -60.0, -100.0, -150.0] {
-        for (k, name) in ["walk", "walk-protected"].into_iter().enumerate() {
-            let f = pushed_walk(nunes::controller(name)?, impulse)?;
-            if f.fell {
-                falls[k] += 1;
-                if f.head_down {
-                    if k == 1 {
-                        protected_heads[usize::from(impulse < 0.0)] += 1;
-                    } else {
-                        bare_heads[usize::from(impulse < 0.0)] += 1;
+    let walkers: [(&str, Option<Actuation>, &[(String, f64)]); 2] =
+        [("× 27 (faithful)", Some(nunes::faithful_actuation()), faithful), ("× 100", None, &[])];
+    let mut summary = String::new();
+    for (walker, actuation, thresholds) in walkers {
+        let mut protected_heads = [0usize; 2];
+        let mut bare_heads = [0usize; 2];
+        let mut falls = [0usize; 2];
+        for impulse in [60.0, 100.0, 150.0, -60.0, -100.0, -150.0] {
+            for (k, name) in ["walk", "walk-protected"].into_iter().enumerate() {
+                let mut controller = nunes::controller(name)?;
+                for (label, v) in thresholds {
+                    let id =
+                        controller.param_id(label).with_context(|| format!("{name}.ron has no `{label}`"))?;
+                    controller.set_param(id, *v);
+                }
+                let f = pushed_walk(controller, impulse, actuation)?;
+                if f.fell {
+                    falls[k] += 1;
+                    if f.head_down {
+                        if k == 1 {
+                            protected_heads[usize::from(impulse < 0.0)] += 1;
+                        } else {
+                            bare_heads[usize::from(impulse < 0.0)] += 1;
+                        }
                     }
                 }
+                let _ = writeln!(
+                    s,
+                    "| {walker} | {impulse:+.0} | `{name}.ron` | {} | {} | {} | {} |",
+                    if f.fell { "yes" } else { "no" },
+                    f.first_down.map_or("—".to_string(), |(b, k)| format!("{b} ({})", seconds(k))),
+                    if f.head_down { "yes" } else { "no" },
+                    f.protected.map_or("none".to_string(), |(m, k)| format!("{m} ({})", seconds(k))),
+                );
             }
-            let _ = writeln!(
-                s,
-                "| {impulse:+.0} | `{name}.ron` | {} | {} | {} | {} |",
-                if f.fell { "yes" } else { "no" },
-                f.first_down.map_or("—".to_string(), |(b, k)| format!("{b} ({})", seconds(k))),
-                if f.head_down { "yes" } else { "no" },
-                f.protected.map_or("none".to_string(), |(m, k)| format!("{m} ({})", seconds(k))),
-            );
         }
+        let _ = writeln!(
+            summary,
+            "\nGains {walker}: falls in {} of 6 pushed runs without the protective machines, {} with them. The head \
+         met the ground in {} forward and {} backward falls without them, {} and {} with them.",
+            falls[0], falls[1], bare_heads[0], bare_heads[1], protected_heads[0], protected_heads[1]
+        );
     }
-    let _ = writeln!(
-        s,
-        "\nFalls: {} of 6 pushed runs without the protective machines, {} with them. The head met the \
-         ground in {} forward and {} backward falls without them, {} and {} with them.",
-        falls[0], falls[1], bare_heads[0], bare_heads[1], protected_heads[0], protected_heads[1]
-    );
+    s.push_str(&summary);
     Ok(s)
 }
 
@@ -350,7 +369,8 @@ fn faithful_run(c: Controller, iterations: u64, long: bool) -> Result<nunes::Wal
 
 /// Table 6.3's before-and-after on the configuration closest to the thesis in which it holds
 /// ([`nunes::FAITHFUL_GAIN`]): the thesis's search, unchanged, on the humanoid with gains × 27.
-fn walk_faithful(repo: &Repo) -> Result<String> {
+/// Also returns the winner's thresholds, by label.
+fn walk_faithful(repo: &Repo) -> Result<(String, Vec<(String, f64)>)> {
     // The shipped spec, so that `anima optimise assets/optimisations/walk-faithful.ron` runs what this
     // report shows.
     let loaded = thesis_spec(repo, "walk-faithful")?;
@@ -417,7 +437,9 @@ fn walk_faithful(repo: &Repo) -> Result<String> {
         log.len(),
         (after.distance / 50.0) / 0.21
     );
-    Ok(s)
+    let winner_values =
+        ids.iter().zip(&best.x).map(|(&i, &v)| (base.params()[i.0].label.clone(), v)).collect();
+    Ok((s, winner_values))
 }
 
 /// The thesis's variants A (symmetric thresholds) and B (temporal transitions), each optimised as the
