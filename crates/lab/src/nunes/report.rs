@@ -276,8 +276,9 @@ fn walk_protected(faithful: &[(String, f64)]) -> Result<String> {
          |---|---|---|---|---|---|---|\n",
     );
     let seconds = |k: u64| format!("{:.2}", k as f64 * nunes::DT);
-    let walkers: [(&str, Option<Actuation>, &[(String, f64)]); 2] =
-        [("× 27 (faithful)", Some(nunes::faithful_actuation()), faithful), ("× 100", None, &[])];
+    let experiments: &[(String, f64)] = &[];
+    let walkers =
+        [("× 27 (faithful)", Some(nunes::faithful_actuation()), faithful), ("× 100", None, experiments)];
     let mut summary = String::new();
     for (walker, actuation, thresholds) in walkers {
         let mut protected_heads = [0usize; 2];
