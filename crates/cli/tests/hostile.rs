@@ -207,7 +207,9 @@ fn a_run_keeps_its_outputs_whole_and_its_own() {
         .output()
         .unwrap();
     assert!(short.status.success());
-    assert!(String::from_utf8_lossy(&short.stderr).contains("removed 10 frame files of an earlier run"));
+    // Ten frame files (five frames in two formats) and the earlier run's series.json.
+    let err = String::from_utf8_lossy(&short.stderr);
+    assert!(err.contains("removed 11 output files (frames, animation, series) of an earlier run"), "{err}");
     assert!(out.join("cortina_2.OBT").is_file() && !out.join("cortina_5.OBT").exists());
     assert!(
         all_files(&out).iter().all(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.')),

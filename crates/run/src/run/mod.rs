@@ -331,7 +331,10 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
         };
         let removed = crate::output::remove_stale(dir, ours)?;
         if removed > 0 {
-            progress.warn(&format!("removed {removed} frame files of an earlier run from {}", dir.display()));
+            progress.warn(&format!(
+                "removed {removed} output files (frames, animation, series) of an earlier run from {}",
+                dir.display()
+            ));
         }
     }
     let run = |progress: &mut dyn Progress| match scene {
