@@ -301,14 +301,8 @@ pub fn load_optimisation(path: &Path) -> Result<LoadedOptimisation, SceneError> 
             )
         })?;
     }
-    if let Err(e) =
-        anima_character::check_controller(&controller, &[&skeleton], &anima_character::procedures(), &[])
-    {
-        return Err(match e.field_error(&controller_text) {
-            Some(source) => SceneError::Description { path, source },
-            None => file.invalid_at(text, "controller", e.to_string()),
-        });
-    }
+    anima_character::check_controller(&controller, &[&skeleton], &anima_character::procedures(), &[])
+        .map_err(|e| file.controller_error(&e, text, path, &controller_text))?;
     Ok(LoadedOptimisation { spec, controller })
 }
 
@@ -458,6 +452,22 @@ impl File<'_> {
         }
     }
 
+    /// A controller that does not bind to its figures: at its line of the controller file (at `path`,
+    /// holding `controller_text`) when the error names one of its fields, else at this file's
+    /// `controller` field.
+    fn controller_error(
+        &self,
+        e: &anima_character::CharacterError,
+        text: &str,
+        path: PathBuf,
+        controller_text: &str,
+    ) -> SceneError {
+        match e.field_error(controller_text) {
+            Some(source) => SceneError::Description { path, source },
+            None => self.invalid_at(text, "controller", e.to_string()),
+        }
+    }
+
     /// The controller file `name`, read with the character procedures, with its path and text.
     fn controller(&self, name: &str) -> Result<(Controller, PathBuf, String), SceneError> {
         let (path, bytes) = self.read("controller file", name)?;
@@ -495,36 +505,26 @@ impl File<'_> {
             skeletons.push(sk);
         }
         let (controller, controller_path, controller_text) = self.controller(&scene.controller)?;
-        // Every actuator the controller drives must be one of the models' (`alias/name`, or a model's
-        // own name when there is one model): checked here, so a wrong name is an error before the run.
-        for name in controller.actuators() {
-            let (model, local) = match name.split_once('/') {
-                Some((alias, local)) => (scene.models.iter().position(|m| m.alias == alias), local),
-                None => (Some(0), name.as_str()),
-            };
-            if model.is_none_or(|m| skeletons[m].actuator_index(local).is_none()) {
-                return Err(self.invalid_at(
-                    text,
-                    "controller",
-                    format!("controller actuator `{name}` names no actuator of the scene's models"),
-                ));
-            }
-        }
-        // The sensors' kinds and arguments and the procedures' bodies, checked against the models
-        // here, so that a wrong one is an error at its line of the controller file, before the run.
+        // The controller bound to the models without a world: every actuator one of theirs (`alias/name`,
+        // or a model's own name when there is one model), every sensor's kind and arguments, every
+        // procedure's bodies; a wrong one is an error before the run, at its line of the controller file
+        // where it has one.
         let skeleton_refs: Vec<&Skeleton> = skeletons.iter().collect();
         let aliases: Vec<&str> = scene.models.iter().map(|m| m.alias.as_str()).collect();
-        if let Err(e) = anima_character::check_controller(
+        anima_character::check_controller(
             &controller,
             &skeleton_refs,
             &anima_character::procedures(),
             &aliases,
-        ) {
-            return Err(match e.field_error(&controller_text) {
-                Some(source) => SceneError::Description { path: controller_path, source },
-                None => self.invalid_at(text, "controller", e.to_string()),
-            });
-        }
+        )
+        .map_err(|e| match e {
+            anima_character::CharacterError::Actuator(name) => self.invalid_at(
+                text,
+                "controller",
+                format!("controller actuator `{name}` names no actuator of the scene's models"),
+            ),
+            e => self.controller_error(&e, text, controller_path, &controller_text),
+        })?;
         Ok(LoadedCharacter { scene, skeletons, controller })
     }
 }
