@@ -96,27 +96,25 @@ fn interruptible<R: Send>(py: Python<'_>, work: impl FnOnce() -> R + Send) -> Py
     })
 }
 
-/// Steps `n` times in growing chunks of `run`, each without the GIL, looking for Ctrl-C between
-/// chunks at least every [`POLL`] (a chunk is doubled while it takes less). Interrupted, the state is
-/// that of the last whole step.
-fn stepped<S: Send>(
+/// Runs `chunk(sim, k)` without the GIL for k = 1, 2, 4, … (k doubled while a chunk takes under half a
+/// [`POLL`]) until it returns `true` (done), looking for Ctrl-C between chunks. Interrupted, the state
+/// is that of the last whole step.
+fn in_chunks<S: Send>(
     py: Python<'_>,
     sim: &mut S,
-    n: usize,
-    run: impl Fn(&mut S, usize) -> anyhow::Result<()> + Sync,
+    mut chunk: impl FnMut(&mut S, usize) -> anyhow::Result<bool> + Send,
 ) -> PyResult<()> {
-    let (mut left, mut chunk) = (n, 1usize);
-    while left > 0 {
-        let k = chunk.min(left);
+    let mut k = 1usize;
+    loop {
         let start = Instant::now();
-        py.detach(|| run(&mut *sim, k)).map_err(simulation_error)?;
-        left -= k;
+        if py.detach(|| chunk(&mut *sim, k)).map_err(simulation_error)? {
+            return Ok(());
+        }
         if start.elapsed() < POLL / 2 {
-            chunk = chunk.saturating_mul(2);
+            k = k.saturating_mul(2);
         }
         py.check_signals()?;
     }
-    Ok(())
 }
 
 fn value_error(e: impl std::fmt::Display) -> PyErr {
@@ -317,7 +315,13 @@ impl Cloth {
     /// Takes `n` steps, the GIL released. Raises `SimulationError` at a non-finite state.
     #[pyo3(signature = (n = 1))]
     fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
-        stepped(py, &mut self.sim, n, |sim, k| sim.run(k))
+        let mut left = n;
+        in_chunks(py, &mut self.sim, |sim, k| {
+            let k = k.min(left);
+            sim.run(k)?;
+            left -= k;
+            Ok(left == 0)
+        })
     }
 
     /// Steps until the simulated time reaches `t` s (by default the scene's duration).
@@ -327,21 +331,12 @@ impl Cloth {
         if !t.is_finite() {
             return Err(value_error(format!("the time to run to must be finite, found {t}")));
         }
-        let sim = &mut self.sim;
-        // In spans of simulated time, doubled while one takes less than half a poll, each run to its
-        // end without the GIL (the steps are those of one run to `t`), so that Ctrl-C is answered
-        // between them.
-        let mut span = sim.dt().max(1e-9);
-        while sim.time() < t - 1e-12 {
-            let to = t.min(sim.time() + span);
-            let start = Instant::now();
-            py.detach(|| sim.run_until(to)).map_err(simulation_error)?;
-            if start.elapsed() < POLL / 2 {
-                span *= 2.0;
-            }
-            py.check_signals()?;
-        }
-        Ok(())
+        // In spans of k steps' time, each run to its end (the steps are those of one run to `t`).
+        let dt = self.sim.dt().max(1e-9);
+        in_chunks(py, &mut self.sim, |sim, k| {
+            sim.run_until(t.min(sim.time() + k as f64 * dt))?;
+            Ok(sim.time() >= t - 1e-12)
+        })
     }
 
     /// Positions, an `(n, 3)` float64 array (a copy).
