@@ -2,6 +2,7 @@
 the call was working on usable: a cloth at its last whole step, an optimisation where its log ends."""
 
 import _thread
+import faulthandler
 import threading
 import time
 
@@ -18,8 +19,11 @@ ANSWERED_WITHIN_S = 5.0
 
 
 def interrupted(call):
-    """Runs `call`, presses Ctrl-C after AFTER_S, and returns the seconds it took to raise."""
+    """Runs `call`, presses Ctrl-C after AFTER_S, and returns the seconds it took to raise. A call that
+    ignores Ctrl-C would never return: past a minute the process is ended with every thread's traceback,
+    so the test fails instead of hanging the test run."""
     timer = threading.Timer(AFTER_S, _thread.interrupt_main)
+    faulthandler.dump_traceback_later(60, exit=True)
     start = time.monotonic()
     timer.start()
     try:
@@ -27,6 +31,7 @@ def interrupted(call):
             call()
     finally:
         timer.cancel()
+        faulthandler.cancel_dump_traceback_later()
     return time.monotonic() - start
 
 
