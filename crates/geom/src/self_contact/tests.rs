@@ -278,3 +278,81 @@ fn skipping_flat_pieces_loses_no_impact_of_a_folding_sheet() {
     every.update(triangles, &flat, &x1, 0.01);
     assert!(every.vertex_triangle_pairs().len() + every.edge_edge_pairs().len() > 200);
 }
+
+/// `update_moved` after an update lists exactly the pairs with a moved vertex that an update of the new
+/// trajectories on the same tree lists, though it computes again only the cones of the triangles with a
+/// moved corner:
+/// a flat sheet whose marked vertices fold a strip of it over itself (a flat piece that stops being
+/// flat) and, in other cases, only ripple.
+#[test]
+fn an_update_of_the_moved_vertices_lists_what_a_fresh_update_lists_for_them() {
+    fn sorted<T: Ord>(mut v: Vec<T>) -> Vec<T> {
+        v.sort();
+        v
+    }
+    use crate::{DiagonalPattern, MaterialMesh};
+    let mesh = MaterialMesh::grid(12, 1.0, DiagonalPattern::Alternating).unwrap();
+    let flat = mesh.place(DVec3::ZERO, DVec3::X, DVec3::Y);
+    let triangles = mesh.triangles();
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let mut found = 0;
+    for case in 0..40 {
+        let x1: Vec<DVec3> = flat.iter().map(|p| *p + DVec3::new(0.0, 0.0, -0.02)).collect();
+        // The vertices past x = fold fold back over the sheet in half the cases, and ripple otherwise.
+        let fold = rng.random_range(0.4..0.7);
+        let folding = case % 2 == 0;
+        let moved: Vec<bool> = flat.iter().map(|p| p.x > fold).collect();
+        let x2: Vec<DVec3> = flat
+            .iter()
+            .zip(&x1)
+            .map(|(p, &q)| {
+                if p.x <= fold {
+                    q
+                } else if folding {
+                    DVec3::new(2.0 * fold - p.x, p.y, 0.004 * (p.x - fold) - 0.02)
+                } else {
+                    q + DVec3::new(0.0, 0.0, 0.003 * (9.0 * p.y).sin())
+                }
+            })
+            .collect();
+        let thickness = 0.01;
+        let mut incremental = SelfContactBroadPhase::new();
+        incremental.update(triangles, &flat, &x1, thickness);
+        incremental.update_moved(triangles, &flat, &x2, thickness, &moved, false);
+        // The same tree (built at the first update, refitted since) listing every pair afresh.
+        let mut fresh = SelfContactBroadPhase::new();
+        fresh.update(triangles, &flat, &x1, thickness);
+        fresh.update(triangles, &flat, &x2, thickness);
+        let any = |ids: &[u32]| ids.iter().any(|&i| moved[i as usize]);
+        let fresh_vt = sorted(
+            fresh
+                .vertex_triangle_pairs()
+                .iter()
+                .filter(|p| any(&[p.vertex]) || any(&triangles[p.triangle as usize]))
+                .copied()
+                .collect::<Vec<_>>(),
+        );
+        let fresh_ee = sorted(
+            fresh
+                .edge_edge_pairs()
+                .iter()
+                .filter(|p| any(p.edges.as_flattened()))
+                .copied()
+                .collect::<Vec<_>>(),
+        );
+        let listed = sorted(incremental.vertex_triangle_pairs().to_vec());
+        let missing = fresh_vt.iter().filter(|p| !listed.contains(p)).count();
+        assert!(
+            listed == fresh_vt,
+            "case {case}: {} pairs against {}, {missing} missing",
+            listed.len(),
+            fresh_vt.len()
+        );
+        assert_eq!(sorted(incremental.edge_edge_pairs().to_vec()), fresh_ee, "case {case}");
+        if folding {
+            assert!(!fresh_vt.is_empty(), "case {case}: the fold must bring pairs");
+        }
+        found += fresh_vt.len() + fresh_ee.len();
+    }
+    assert!(found > 100, "{found}");
+}
