@@ -68,7 +68,8 @@ mod stepper;
 pub use control::{IntegrationError, IntegrationStats, StepControl, integrate};
 pub use coord::Coord;
 pub use implicit::alpha::{
-    AlphaParameters, DEFAULT_NEWTON_CONTRACTION, DEFAULT_NEWTON_ITERATIONS, DEFAULT_RHO_INF,
+    AlphaParameters, DEFAULT_NEWTON_CONTRACTION, DEFAULT_NEWTON_ITERATIONS, DEFAULT_REGIME_ITERATIONS,
+    DEFAULT_RHO_INF,
 };
 pub use implicit::contact;
 pub use implicit::workspace::SolveProfile;

@@ -195,6 +195,7 @@ impl<C: Coord> Stepper<C> {
             to.solver = from.solver;
             to.newton_iterations = from.newton_iterations;
             to.newton_contraction = from.newton_contraction;
+            to.regime_iterations = from.regime_iterations;
             if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
                 b.params = a.params;
             }
@@ -272,6 +273,21 @@ impl<C: Coord> Stepper<C> {
         if let Some(ws) = &mut self.implicit {
             ws.newton_contraction = ratio.max(0.0);
         }
+    }
+
+    /// Generalised-α with contacts in its solve: up to `iterations` Newton iterations beyond the planned
+    /// ones while contacts still change regime (stick, slide, free) at the last iterate. The default is
+    /// [`crate::DEFAULT_REGIME_ITERATIONS`], where the measurements behind it are. No effect on other
+    /// integrators or without contacts.
+    pub fn set_regime_iterations(&mut self, iterations: usize) {
+        if let Some(ws) = &mut self.implicit {
+            ws.regime_iterations = iterations;
+        }
+    }
+
+    /// Generalised-α's iterations for contacts that change regime (`None` for explicit integrators).
+    pub fn regime_iterations(&self) -> Option<usize> {
+        self.implicit.as_ref().map(|w| w.regime_iterations)
     }
 
     /// Generalised-α's early-stop ratio (`None` for explicit integrators).

@@ -55,8 +55,8 @@ use super::workspace::ImplicitWorkspace;
 /// ρ∞ when none is set: see the module documentation for the measurements behind it.
 pub const DEFAULT_RHO_INF: f64 = 0.2;
 
-/// Newton iterations per step when none is set (the planned ones; up to two more run while contacts
-/// change regime). Measured on the standard sheet (N = 64, 1 s at 1/60 s) with the default solver
+/// Newton iterations per step when none is set (the planned ones; more can run while contacts change
+/// regime, [`DEFAULT_REGIME_ITERATIONS`]). Measured on the standard sheet (N = 64, 1 s at 1/60 s) with the default solver
 /// (rigid-aggregation CG to a relative residual of 0.1 per iteration; `cargo run --release -p
 /// anima-cloth --example large_steps -- probe`, with `NEWTON=k`, before the spring-form matrix): 2
 /// iterations err 6.5 mm at the centre of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms
@@ -119,8 +119,28 @@ const MIN_NEWTON_ITERATIONS: usize = 2;
 /// off.
 pub const DEFAULT_NEWTON_CONTRACTION: f64 = 0.3;
 
-/// Newton iterations beyond the planned ones while contacts still change regime.
-const MAX_EXTRA_ITERATIONS: usize = 2;
+/// Newton iterations beyond the planned ones while contacts still change regime, when none is set
+/// ([`crate::Stepper::set_regime_iterations`]).
+///
+/// None, measured on the drapes of `cargo xtask bench --scale` (Oliveira's cloth on the Bunny and on a
+/// sphere, 65², 3 s at 1/60 s, two threads; `cargo run --release -p anima-lab --example scale_probe`).
+/// Their active sets never settle: from the first Newton iteration to the fifth, 25–35 % of the
+/// contacts change regime at every iteration, mostly sticking and sliding in turn (a sliding particle's
+/// velocity turns against its friction, it sticks, its tangential reaction then exceeds the static
+/// limit, it slides), and a contact released because it pulls is found beyond its plane again at the
+/// next iterate. Two more iterations (the earlier default) therefore ran in almost every step: 4.9
+/// Newton iterations a step instead of 3, and 115–121 against 83–88 ms a step on the 129² Bunny (1.5 s,
+/// alternated runs). What they bought is small beside the chaos of these drapes: against the converged
+/// model (1/960 s), three runs each with gravity × (1, 1 ± 10⁻⁹), the Bunny erred 12.6–17.2 mm with two
+/// extra iterations and 15.2–17.6 mm with none (the band of two converged runs is 7.0 mm); the sphere
+/// 19.3–19.6 mm with two and 22.5–23.0 mm with none (band 1.7 mm: 2 bands more without them). One
+/// extra iteration erred more than either (17.6–22.6 and 31.1–33.3 mm). Counting only contacts that
+/// arrive (not those that cycle) still ran 3.9 iterations a step for the same errors. No step ends
+/// inside an object either way: the last look at the contacts after the iterations removes the inward
+/// velocity of every coordinate still beyond its plane. (The trajectories differ, as any change does
+/// in a chaotic drape: a 40 × 40 cloth on the Bunny that came within its thickness of itself with two
+/// now does not, `crates/cloth/tests/scale.rs`.)
+pub const DEFAULT_REGIME_ITERATIONS: usize = 0;
 
 /// Detection rounds of the last look at the contacts.
 const SETTLE_ROUNDS: usize = 3;
@@ -188,6 +208,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         });
         ws.newton_iterations = DEFAULT_NEWTON_ITERATIONS;
         ws.newton_contraction = DEFAULT_NEWTON_CONTRACTION;
+        ws.regime_iterations = DEFAULT_REGIME_ITERATIONS;
         #[cfg(feature = "sparse-cholesky")]
         {
             ws.solver = super::LinearSolver::default_aggregation();
@@ -291,10 +312,10 @@ impl<C: Coord> ImplicitWorkspace<C> {
             } else {
                 None
             };
-            // The planned iterations, and up to MAX_EXTRA_ITERATIONS more while the contacts keep
+            // The planned iterations, and up to `regime_iterations` more while the contacts keep
             // changing (a regime change is only honoured by a solve).
             let planned = newton < self.newton_iterations && !contracted && (merit > 0.0 || regimes_changed);
-            let more = regimes_changed && extra < MAX_EXTRA_ITERATIONS;
+            let more = regimes_changed && extra < self.regime_iterations;
             if !(planned || more) {
                 if let Some(s) = projectors {
                     self.contact.filter = s;
@@ -360,9 +381,11 @@ impl<C: Coord> ImplicitWorkspace<C> {
             self.trial.copy_from_slice(&next.v);
             let mut step = 1.0;
             let halvings = if regimes_changed { 0 } else { MAX_HALVINGS };
-            // After the last planned iteration without contacts no solve follows: the trial point needs
-            // its residual only, not a new matrix.
-            let with_matrix = contacts.is_some() || (newton < self.newton_iterations && !contracted);
+            // A solve follows only while planned iterations remain or, with contacts, while iterations
+            // for regime changes may still run: otherwise the trial point needs its residual only (for
+            // the contacts' last update), not a new matrix.
+            let with_matrix = (newton < self.newton_iterations && !contracted)
+                || (contacts.is_some() && extra < self.regime_iterations);
             for attempt in 0..=halvings {
                 for i in 0..n {
                     next.v[i] = self.trial[i] + self.delta[i] * step;

@@ -45,6 +45,9 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     /// Generalised-α stops its Newton iterations early once an update contracts to this fraction of
     /// the one before ([`super::alpha::DEFAULT_NEWTON_CONTRACTION`]; 0 never stops early).
     pub newton_contraction: f64,
+    /// Generalised-α with contacts: Newton iterations beyond the planned ones while contacts still
+    /// change regime ([`super::alpha::DEFAULT_REGIME_ITERATIONS`]).
+    pub regime_iterations: usize,
     pub(super) f: Vec<C>,
     pub(super) jac: Jacobians<C>,
     pub(super) a: SystemMatrix<C>,
@@ -90,6 +93,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             solver: LinearSolver::default_cg(),
             newton_iterations: if bdf2 { 2 } else { 1 },
             newton_contraction: 0.0,
+            regime_iterations: 0,
             f: zeros(),
             jac: Jacobians::new(n, 0),
             a: SystemMatrix::new(),
