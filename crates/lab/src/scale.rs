@@ -748,3 +748,80 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
+
+/// A quick look at one drape for whoever tunes its step (`cargo run --release -p anima-lab --example
+/// scale_probe`): `seconds` of the drape `obstacle` at `v`² (gravity × `gravity`, `regime` Newton
+/// iterations for contacts that change regime when given) on the pool it runs in, with where the time
+/// went and, for a 3 s run of a size whose converged references are cached, its error beside their band.
+pub fn probe(
+    repo: &Repo,
+    obstacle: &str,
+    v: usize,
+    seconds: f64,
+    gravity: f64,
+    regime: Option<usize>,
+) -> Result<String> {
+    let wall = Instant::now();
+    let mut cloth = drape_cloth(repo, obstacle, v, gravity, DT)?;
+    cloth.stepper_mut().set_profiling(true);
+    if let Some(k) = regime {
+        cloth.stepper_mut().set_regime_iterations(k);
+    }
+    let n_steps = (seconds / DT).round() as u64;
+    let mut stepping = 0.0;
+    let (mut inside, mut crossings, mut fastest) = (0, 0, 0.0f64);
+    for k in 0..n_steps {
+        let started = Instant::now();
+        cloth.step().with_context(|| format!("step {k}"))?;
+        stepping += started.elapsed().as_secs_f64();
+        inside = inside.max(cloth.penetrations().len());
+        fastest = fastest.max(cloth.max_speed());
+        if k % 10 == 9 || k + 1 == n_steps {
+            crossings = crossings.max(count_self_intersections(cloth.positions(), cloth.triangles()));
+        }
+    }
+    let p = cloth.stepper_mut().profile().unwrap_or_default();
+    let steps = n_steps.max(1) as f64;
+    let ms = |s: f64| 1e3 * s / steps;
+    let stats = cloth.self_collision_stats().unwrap_or_default();
+    let times = stats.times;
+    let self_s = times.total().as_secs_f64();
+    let mut out = format!(
+        "{obstacle} {v}², {seconds} s on {} threads: {:.1} ms per step (assembly {:.1}, set-up {:.1}, solves {:.1}, \
+         contact {:.1}, self-collision {:.1}: broad phase {:.1}, proximity {:.1}, impacts {:.1}, zones {:.1}); Newton {:.2}, CG {:.1}, coarse set-ups {:.2} per step; most inside {inside}, \
+         most crossings {crossings} (every 10th step), fastest {fastest:.2} m/s; self-collision repulsions {}, impacts {}; wall {:.1} s",
+        anima_ode::parallel::threads(),
+        ms(stepping),
+        ms(p.assembly_s),
+        ms(p.setup_s),
+        ms(p.solve_s),
+        ms(p.contact_s),
+        ms(self_s),
+        ms(times.broad_phase.as_secs_f64()),
+        ms(times.proximity.as_secs_f64()),
+        ms(times.impacts.as_secs_f64()),
+        ms(times.zones.as_secs_f64()),
+        p.newton_iterations as f64 / steps,
+        p.solver_iterations as f64 / steps,
+        p.factorizations as f64 / steps,
+        stats.repulsions,
+        stats.impacts,
+        wall.elapsed().as_secs_f64(),
+    );
+    let cached =
+        |g: f64| read_points(&repo.cache(format!("scale/drape-{obstacle}-{v}-dt960-g{:+.0e}.f64", g)));
+    if (seconds - 3.0).abs() < 1e-9
+        && let (Some(reference), Some(up), Some(down)) = (cached(0.0), cached(1e-9), cached(-1e-9))
+    {
+        let (error, band) = (rms(cloth.positions(), &reference), rms(&up, &down));
+        let _ = write!(
+            out,
+            "\nRMS error {:.1} mm against the 1/960 s reference, band {:.1} mm ({:.1} bands), centre of mass off by {:.1} mm",
+            1e3 * error,
+            1e3 * band,
+            error / band,
+            1e3 * centre(cloth.positions()).distance(centre(&reference))
+        );
+    }
+    Ok(out)
+}

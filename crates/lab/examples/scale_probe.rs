@@ -1,0 +1,20 @@
+//! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny),
+//! `V` = 65 | 129 | 257 (65), `T` = simulated seconds (3; a 3 s run of a size whose converged references
+//! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1), `REGIME` (Newton iterations for contacts
+//! that change regime; the stepper's default).
+
+use anima_lab::repo::Repo;
+
+fn main() -> anyhow::Result<()> {
+    let var = |k: &str| std::env::var(k).ok();
+    let obstacle = var("OBSTACLE").unwrap_or_else(|| "bunny".into());
+    let v: usize = var("V").and_then(|s| s.parse().ok()).unwrap_or(65);
+    let t: f64 = var("T").and_then(|s| s.parse().ok()).unwrap_or(3.0);
+    let gravity: f64 = var("GRAVITY").and_then(|s| s.parse().ok()).unwrap_or(1.0);
+    let regime: Option<usize> = var("REGIME").and_then(|s| s.parse().ok());
+    let threads: usize = var("THREADS").and_then(|s| s.parse().ok()).unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let report = pool.install(|| anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime))?;
+    println!("{report}");
+    Ok(())
+}
