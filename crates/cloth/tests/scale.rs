@@ -108,9 +108,10 @@ fn a_diverging_sheet_is_stopped_by_its_bounds_soon_after_it_leaves_them() {
 /// self-collision response (it once ended torn, with particles inside the Bunny at hundreds of m/s and
 /// no warning). It now drapes: no particle inside an obstacle, no crossing, no speed beyond what the fall
 /// gives and no spring stretched to twice its length, after every step of 2 s. With the scene's friction
-/// (0.3) the cloth barely comes within its thickness of itself, so the same drape runs frictionless too,
-/// where it slides off the Bunny and folds onto itself on the floor: there the self-collision response
-/// must have acted. (When the corners land on the floor, generalised-α's three Newton iterations with
+/// (0.3) whether the cloth comes within its thickness of itself depends on the smallest changes to the
+/// step (with no Newton iterations for contacts that change regime it does not), so the same drape runs
+/// frictionless too, where it slides off the Bunny and folds onto itself on the floor: there the
+/// self-collision response must have acted. (When the corners land on the floor, generalised-α's three Newton iterations with
 /// their loose linear solves leave one step with springs up to 70 % long, 14 % with six iterations;
 /// the next step pulls them back. Settling more steps' solves only where they need it is left for
 /// later.)
