@@ -725,30 +725,6 @@ fn stability_section(sheets: &[usize]) -> Result<String> {
     Ok(out)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn npy_files_read_back() {
-        let dir = std::env::temp_dir().join(format!("anima-npy-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let header = "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }";
-        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
-        let pad = 64 - (10 + header.len() + 1) % 64;
-        let full = format!("{header}{}\n", " ".repeat(pad));
-        bytes.extend((full.len() as u16).to_le_bytes());
-        bytes.extend(full.as_bytes());
-        for v in [1.0f64, 2.0, 3.0, -4.0, 5.5, 6.25] {
-            bytes.extend(v.to_le_bytes());
-        }
-        let path = dir.join("x.npy");
-        std::fs::write(&path, bytes).unwrap();
-        assert_eq!(read_npy(&path).unwrap(), vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(-4.0, 5.5, 6.25)]);
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-}
-
 /// A quick look at one drape for whoever tunes its step (`cargo run --release -p anima-lab --example
 /// scale_probe`): `seconds` of the drape `obstacle` at `v`² (gravity × `gravity`, `regime` Newton
 /// iterations for contacts that change regime when given) on the pool it runs in, with where the time
@@ -824,4 +800,28 @@ pub fn probe(
         );
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn npy_files_read_back() {
+        let dir = std::env::temp_dir().join(format!("anima-npy-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let header = "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }";
+        let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+        let pad = 64 - (10 + header.len() + 1) % 64;
+        let full = format!("{header}{}\n", " ".repeat(pad));
+        bytes.extend((full.len() as u16).to_le_bytes());
+        bytes.extend(full.as_bytes());
+        for v in [1.0f64, 2.0, 3.0, -4.0, 5.5, 6.25] {
+            bytes.extend(v.to_le_bytes());
+        }
+        let path = dir.join("x.npy");
+        std::fs::write(&path, bytes).unwrap();
+        assert_eq!(read_npy(&path).unwrap(), vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(-4.0, 5.5, 6.25)]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
