@@ -1,7 +1,7 @@
 //! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny),
 //! `V` = 65 | 129 | 257 (65), `T` = simulated seconds (3; a 3 s run of a size whose converged references
-//! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1), `REGIME` (Newton iterations for contacts
-//! that change regime; the stepper's default).
+//! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1),
+//! `REGIME` (Newton iterations for contacts that change regime; the stepper's default).
 
 use anima_lab::repo::Repo;
 

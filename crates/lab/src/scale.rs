@@ -175,6 +175,11 @@ fn drape_cloth(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> 
     Ok(loaded.build()?)
 }
 
+/// Where [`converged`] caches its positions.
+fn converged_path(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> PathBuf {
+    repo.cache(format!("scale/drape-{obstacle}-{v}-dt{:.0}-g{:+.0e}.f64", 1.0 / dt, gravity - 1.0))
+}
+
 /// Runs a drape to its 3 s; with `watch`, counts particles inside the obstacles and crossing pairs after
 /// every step (outside the timed part).
 fn drape_run(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64, watch: bool) -> Result<DrapeRun> {
@@ -265,8 +270,7 @@ fn drape_picture(cloth: &OliveiraCloth, name: &str) -> Result<anima_viz::Image> 
 /// Positions at 3 s of a converged drape (step `dt`, gravity × `gravity`), cached under
 /// `target/anima-lab/scale/`.
 fn converged(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> Result<Vec<DVec3>> {
-    let name = format!("scale/drape-{obstacle}-{v}-dt{:.0}-g{:+.0e}.f64", 1.0 / dt, gravity - 1.0);
-    let path = repo.cache(&name);
+    let path = converged_path(repo, obstacle, v, gravity, dt);
     if let Some(x) = read_points(&path) {
         return Ok(x);
     }
@@ -784,10 +788,9 @@ pub fn probe(
         stats.impacts,
         wall.elapsed().as_secs_f64(),
     );
-    let cached =
-        |g: f64| read_points(&repo.cache(format!("scale/drape-{obstacle}-{v}-dt960-g{:+.0e}.f64", g)));
+    let cached = |g: f64| read_points(&converged_path(repo, obstacle, v, g, 1.0 / 960.0));
     if (seconds - 3.0).abs() < 1e-9
-        && let (Some(reference), Some(up), Some(down)) = (cached(0.0), cached(1e-9), cached(-1e-9))
+        && let (Some(reference), Some(up), Some(down)) = (cached(1.0), cached(1.0 + 1e-9), cached(1.0 - 1e-9))
     {
         let (error, band) = (rms(cloth.positions(), &reference), rms(&up, &down));
         let _ = write!(
