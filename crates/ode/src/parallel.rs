@@ -70,6 +70,17 @@ pub fn for_chunks<A: Send>(a: &mut [A], f: impl Fn(usize, &mut [A]) + Sync + Sen
     a.par_chunks_mut(len).enumerate().for_each(|(k, c)| f(k * len, c));
 }
 
+/// [`for_chunks`] for items that each cost much (a coarse aggregate's Galerkin block sums hundreds of
+/// terms): chunks of at least `min_len` items, on every core once there are two such chunks.
+pub fn for_chunks_min<A: Send>(a: &mut [A], min_len: usize, f: impl Fn(usize, &mut [A]) + Sync + Send) {
+    let min_len = min_len.max(1);
+    if a.len() < 2 * min_len || threads() == 1 {
+        return f(0, a);
+    }
+    let len = a.len().div_ceil(4 * threads()).max(min_len);
+    a.par_chunks_mut(len).enumerate().for_each(|(k, c)| f(k * len, c));
+}
+
 /// [`for_chunks`] over two slices of the same length, chunked alike.
 pub fn for_chunks2<A: Send, B: Send>(
     a: &mut [A],

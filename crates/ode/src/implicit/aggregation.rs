@@ -32,6 +32,7 @@
 use crate::Coord;
 use crate::parallel;
 
+use super::SpringBlock;
 use super::cg::Preconditioner;
 use super::cholesky::SparseSolver;
 use super::system::{Filter, SystemMatrix};
@@ -87,6 +88,16 @@ pub(crate) struct RigidAggregation<C: Coord> {
     pair_of: Vec<u32>,
     flip: Vec<bool>,
     n_pairs: usize,
+    /// The pattern's pairs, increasing, with an end in aggregate g
+    /// (`agg_springs[agg_spring_start[g]..agg_spring_start[g + 1]]`), between the two aggregates of
+    /// coarse pair p (`pair_springs`), and at coordinate i (`incident`): the coarse blocks are summed
+    /// from them, one block a thread.
+    agg_springs: Vec<u32>,
+    agg_spring_start: Vec<u32>,
+    pair_springs: Vec<u32>,
+    pair_spring_start: Vec<u32>,
+    incident: Vec<u32>,
+    incident_start: Vec<u32>,
     d_blocks: Vec<Block6>,
     o_blocks: Vec<Block6>,
     s_diag: Vec<f64>,
@@ -197,6 +208,222 @@ fn add_galerkin_block(out: &mut Block6, l: [f64; 3], b: &[[f64; 3]; 3]) {
     }
 }
 
+/// What the spring-form coarse blocks are summed from, borrowed from a [`RigidAggregation`] while its
+/// blocks are written ([`RigidAggregation::galerkin_springs`]).
+struct GalerkinTerms<'a, C: Coord> {
+    per: usize,
+    agg: &'a [u32],
+    lever: &'a [[f64; 3]],
+    projected: &'a [bool],
+    projector: &'a [[[f64; 3]; 3]],
+    flip: &'a [bool],
+    springs: &'a [SpringBlock<C>],
+    masses: &'a [f64],
+    /// Per coordinate, Σ B over its springs to other aggregates (empty while it is summed).
+    across: &'a [[f64; 6]],
+}
+
+impl<C: Coord> GalerkinTerms<'_, C> {
+    /// Spring e's ends, their aggregates, u (padded to three components) and a.
+    #[inline]
+    fn spring(&self, e: usize) -> (usize, usize, u32, u32, [f64; 3], f64) {
+        let SpringBlock { i, j, u, a } = self.springs[e];
+        let (i, j) = (i as usize, j as usize);
+        let u = std::array::from_fn(|k| if k < C::DIM { u.component(k) } else { 0.0 });
+        (i, j, self.agg[i], self.agg[j], u, a)
+    }
+
+    /// Sᵢ B S_j, S the identity where the coordinate is not projected.
+    #[inline]
+    fn projected_pair(&self, i: usize, b: &[[f64; 3]; 3], j: usize) -> [[f64; 3]; 3] {
+        let identity: [[f64; 3]; 3] =
+            std::array::from_fn(|r| std::array::from_fn(|c| if r == c { 1.0 } else { 0.0 }));
+        let si = if self.projected[i] { self.projector[i] } else { identity };
+        let sj = if self.projected[j] { self.projector[j] } else { identity };
+        mat3_mul(&mat3_mul(&si, b), &sj)
+    }
+
+    /// Scalar projectors (0 or 1) of i and j.
+    #[inline]
+    fn scalar_projectors(&self, i: usize, j: usize) -> (f64, f64) {
+        let p = |k: usize| if self.projected[k] { self.projector[k][0][0] } else { 1.0 };
+        (p(i), p(j))
+    }
+
+    /// m_i Rᵢᵀ Sᵢ Rᵢ. The levers are taken from the aggregate's mass centre, so Σ m_i S(l_i) = 0 over
+    /// it and only the inertia tensor Σ m (|l|² I − l lᵀ) and the mass Σ m I remain; a projector adds
+    /// m Rᵢᵀ (Sᵢ − I) Rᵢ on top (it is idempotent), which keeps its rotation–translation terms.
+    fn add_mass(&self, i: usize, d: &mut Block6) {
+        let m = self.masses[i];
+        if self.projected[i] {
+            if self.per == 1 {
+                d[0][0] += m * (self.projector[i][0][0] - 1.0);
+            } else {
+                let sm: [[f64; 3]; 3] = std::array::from_fn(|r| {
+                    std::array::from_fn(|c| m * (self.projector[i][r][c] - if r == c { 1.0 } else { 0.0 }))
+                });
+                add_galerkin_block(d, self.lever[i], &sm);
+            }
+        }
+        if self.per == 1 {
+            d[0][0] += m;
+        } else {
+            let l = self.lever[i];
+            let l2 = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+            for p in 0..3 {
+                for q in 0..3 {
+                    d[p][q] -= m * l[p] * l[q];
+                }
+                d[p][p] += m * l2;
+                d[p + 3][p + 3] += m;
+            }
+        }
+    }
+
+    /// What spring e adds to the diagonal block of aggregate g, one of its ends' (3-D springs between
+    /// unprojected coordinates of two aggregates go through [`Self::add_across_to_diagonal`]).
+    fn add_spring_to_diagonal(&self, g: u32, e: usize, d: &mut Block6) {
+        let (i, j, gi, gj, u, s) = self.spring(e);
+        if self.per == 1 {
+            let (pi, pj) = self.scalar_projectors(i, j);
+            let b = u[0] * u[0] + s;
+            if gi != gj {
+                let p = if gi == g { pi } else { pj };
+                d[0][0] += p * b * p;
+            } else if pi != 1.0 || pj != 1.0 {
+                d[0][0] += (pi - pj) * b * (pi - pj);
+            }
+            return;
+        }
+        let (li, lj) = (self.lever[i], self.lever[j]);
+        if self.projected[i] || self.projected[j] {
+            // (Sᵢ Rᵢ − S_j R_j)ᵀ B (Sᵢ Rᵢ − S_j R_j) inside one aggregate; Rᵢᵀ Sᵢ B Sᵢ Rᵢ on i's side.
+            let b = spring_matrix(u, s);
+            if gi == g {
+                add_galerkin_block(d, li, &self.projected_pair(i, &b, i));
+            }
+            if gj == g {
+                add_galerkin_block(d, lj, &self.projected_pair(j, &b, j));
+            }
+            if gi == gj {
+                let m = galerkin3(li, &self.projected_pair(i, &b, j), lj);
+                for p in 0..MAX_PER {
+                    for q in 0..MAX_PER {
+                        d[p][q] -= m[p][q] + m[q][p];
+                    }
+                }
+            }
+            return;
+        }
+        if gi == gj {
+            // (Rᵢ − R_j)ᵀ B (Rᵢ − R_j) with Rᵢ − R_j = [K | 0], K = S(x_i − x_j): rotations only.
+            let k = skew(std::array::from_fn(|c| li[c] - lj[c]));
+            let w: [f64; 3] = std::array::from_fn(|p| k[0][p] * u[0] + k[1][p] * u[1] + k[2][p] * u[2]);
+            for p in 0..3 {
+                for q in 0..3 {
+                    d[p][q] += w[p] * w[q] + s * (k[0][p] * k[0][q] + k[1][p] * k[1][q] + k[2][p] * k[2][q]);
+                }
+            }
+        }
+    }
+
+    /// −Rᵢᵀ Sᵢ B S_j R_j of spring e between two aggregates, to their coarse pair's block (stored as
+    /// (lower aggregate, higher aggregate)).
+    fn add_spring_between(&self, e: usize, o: &mut Block6) {
+        let (i, j, _, _, u, s) = self.spring(e);
+        if self.per == 1 {
+            let (pi, pj) = self.scalar_projectors(i, j);
+            o[0][0] -= pi * (u[0] * u[0] + s) * pj;
+            return;
+        }
+        let (li, lj) = (self.lever[i], self.lever[j]);
+        if self.projected[i] || self.projected[j] {
+            let m = galerkin3(li, &self.projected_pair(i, &spring_matrix(u, s), j), lj);
+            for p in 0..MAX_PER {
+                for q in 0..MAX_PER {
+                    if self.flip[e] {
+                        o[q][p] -= m[p][q];
+                    } else {
+                        o[p][q] -= m[p][q];
+                    }
+                }
+            }
+        } else {
+            let (vi, vj) = (modes_of(li, u), modes_of(lj, u));
+            if self.flip[e] {
+                add_galerkin(o, lj, li, &vj, &vi, s, -1.0);
+            } else {
+                add_galerkin(o, li, lj, &vi, &vj, s, -1.0);
+            }
+        }
+    }
+
+    /// Σ B (xx, yy, zz, xy, xz, yz) over `springs`, a coordinate's, in their order, of those between
+    /// unprojected coordinates of two aggregates (3-D).
+    fn add_across(&self, springs: &[u32], sum: &mut [f64; 6]) {
+        for &e in springs {
+            let (i, j, gi, gj, u, s) = self.spring(e as usize);
+            if gi == gj || self.projected[i] || self.projected[j] {
+                continue;
+            }
+            let b =
+                [u[0] * u[0] + s, u[1] * u[1] + s, u[2] * u[2] + s, u[0] * u[1], u[0] * u[2], u[1] * u[2]];
+            for c in 0..6 {
+                sum[c] += b[c];
+            }
+        }
+    }
+
+    /// Rᵢᵀ Sᵢ (Σ B) Sᵢ Rᵢ of coordinate i's springs to other aggregates.
+    fn add_across_to_diagonal(&self, i: usize, d: &mut Block6) {
+        let c = self.across[i];
+        if c.iter().all(|&v| v == 0.0) {
+            return;
+        }
+        let mut b = [[c[0], c[3], c[4]], [c[3], c[1], c[5]], [c[4], c[5], c[2]]];
+        if self.projected[i] {
+            let p = &self.projector[i];
+            b = mat3_mul(&mat3_mul(p, &b), p);
+        }
+        add_galerkin_block(d, self.lever[i], &b);
+    }
+}
+
+/// Lists the items of `(row, item)` pairs (rows `NONE` left out) by row, each row's items in the order
+/// given: row r's are `items[start[r]..start[r + 1]]`.
+fn group(
+    rows: usize,
+    pairs: impl Iterator<Item = (u32, usize)> + Clone,
+    items: &mut Vec<u32>,
+    start: &mut Vec<u32>,
+) {
+    start.clear();
+    start.resize(rows + 1, 0);
+    for (r, _) in pairs.clone() {
+        if r != NONE {
+            start[r as usize + 1] += 1;
+        }
+    }
+    for r in 0..rows {
+        start[r + 1] += start[r];
+    }
+    let mut fill: Vec<u32> = start[..rows].to_vec();
+    items.clear();
+    items.resize(start[rows] as usize, 0);
+    for (r, e) in pairs {
+        if r != NONE {
+            items[fill[r as usize] as usize] = e as u32;
+            fill[r as usize] += 1;
+        }
+    }
+}
+
+/// B = u uᵀ + s I.
+#[inline]
+fn spring_matrix(u: [f64; 3], s: f64) -> [[f64; 3]; 3] {
+    std::array::from_fn(|r| std::array::from_fn(|c| u[r] * u[c] + if r == c { s } else { 0.0 }))
+}
+
 impl<C: Coord> Clone for RigidAggregation<C> {
     /// A clone starts unbuilt (faer's factor cannot be cloned): its first solve builds the coarse
     /// matrix from the A of that moment, where the original may still use the one of the step's first
@@ -230,6 +457,12 @@ impl<C: Coord> RigidAggregation<C> {
             pair_of: Vec::new(),
             flip: Vec::new(),
             n_pairs: 0,
+            agg_springs: Vec::new(),
+            agg_spring_start: Vec::new(),
+            pair_springs: Vec::new(),
+            pair_spring_start: Vec::new(),
+            incident: Vec::new(),
+            incident_start: Vec::new(),
             d_blocks: Vec::new(),
             o_blocks: Vec::new(),
             s_diag: Vec::new(),
@@ -365,6 +598,28 @@ impl<C: Coord> RigidAggregation<C> {
             self.flip.push(gi > gj);
         }
         self.n_pairs = pairs.len();
+        let ends = |e: usize| [pattern[e].0 as usize, pattern[e].1 as usize];
+        group(
+            self.n_agg,
+            (0..pattern.len()).flat_map(|e| {
+                let [gi, gj] = ends(e).map(|i| self.agg[i]);
+                [(gi, e), (if gj == gi { NONE } else { gj }, e)]
+            }),
+            &mut self.agg_springs,
+            &mut self.agg_spring_start,
+        );
+        group(
+            self.n_pairs,
+            self.pair_of.iter().enumerate().map(|(e, &p)| (p, e)),
+            &mut self.pair_springs,
+            &mut self.pair_spring_start,
+        );
+        group(
+            n,
+            (0..pattern.len()).flat_map(|e| ends(e).map(|i| (i as u32, e))),
+            &mut self.incident,
+            &mut self.incident_start,
+        );
         // The scalar pattern: inside each aggregate (upper triangle), then every coarse pair.
         let mut scalar = Vec::with_capacity(self.n_agg * per * (per - 1) / 2 + pairs.len() * per * per);
         for g in 0..self.n_agg {
@@ -427,13 +682,15 @@ impl<C: Coord> RigidAggregation<C> {
         let masses = if a.spring_form { &a.masses[..] } else { masses };
         let per = self.per;
         // The projectors of the coordinates the filter constrains (prescribed ones are in no aggregate).
-        self.projected.clear();
         self.projected.resize(n, false);
         self.projector.resize(n, [[0.0; 3]; 3]);
-        if let Filter::Projected(blocks) = filter {
+        let blocks = if let Filter::Projected(blocks) = filter { Some(blocks) } else { None };
+        parallel::for_chunks2(&mut self.projected, &mut self.projector, |s, projected, projector| {
             let identity = C::block_identity(1.0);
-            for i in 0..n {
-                let b = blocks[i];
+            for (k, (projected, projector)) in projected.iter_mut().zip(projector).enumerate() {
+                *projected = false;
+                let Some(blocks) = blocks else { continue };
+                let b = blocks[s + k];
                 let entries: [[f64; 3]; 3] = std::array::from_fn(|r| {
                     std::array::from_fn(
                         |c| if r < C::DIM && c < C::DIM { C::block_entry(b, r, c) } else { 0.0 },
@@ -442,42 +699,48 @@ impl<C: Coord> RigidAggregation<C> {
                 let same =
                     (0..C::DIM).all(|r| (0..C::DIM).all(|c| C::block_entry(identity, r, c) == entries[r][c]));
                 if !same {
-                    self.projected[i] = true;
-                    self.projector[i] = entries;
+                    *projected = true;
+                    *projector = entries;
                 }
             }
-        }
-        // Levers from the aggregates' mass centres.
+        });
+        // Levers from the aggregates' mass centres (each summed over its members in increasing order).
         if per == MAX_PER {
-            let centre = &mut self.centres;
-            centre.clear();
-            centre.resize(self.n_agg, [0.0; 4]);
-            for i in 0..n {
-                let g = self.agg[i];
-                if g != NONE {
-                    let c = &mut centre[g as usize];
-                    for k in 0..3 {
-                        c[k] += masses[i] * x[i].component(k);
+            let (members, member_start) = (&self.members, &self.member_start);
+            self.centres.resize(self.n_agg, [0.0; 4]);
+            parallel::for_chunks_min(&mut self.centres, 64, |s, out| {
+                for (k, c) in out.iter_mut().enumerate() {
+                    let g = s + k;
+                    *c = [0.0; 4];
+                    for &i in &members[member_start[g] as usize..member_start[g + 1] as usize] {
+                        let i = i as usize;
+                        for k in 0..3 {
+                            c[k] += masses[i] * x[i].component(k);
+                        }
+                        c[3] += masses[i];
                     }
-                    c[3] += masses[i];
                 }
-            }
-            for i in 0..n {
-                let g = self.agg[i];
-                self.lever[i] = if g == NONE {
-                    [0.0; 3]
-                } else {
-                    let c = centre[g as usize];
-                    std::array::from_fn(|k| x[i].component(k) - c[k] / c[3])
-                };
-            }
-        }
-        for b in self.d_blocks.iter_mut().chain(self.o_blocks.iter_mut()) {
-            *b = [[0.0; MAX_PER]; MAX_PER];
+            });
+            let (agg, centre) = (&self.agg, &self.centres);
+            parallel::for_chunks(&mut self.lever, |s, out| {
+                for (k, lever) in out.iter_mut().enumerate() {
+                    let i = s + k;
+                    let g = agg[i];
+                    *lever = if g == NONE {
+                        [0.0; 3]
+                    } else {
+                        let c = centre[g as usize];
+                        std::array::from_fn(|k| x[i].component(k) - c[k] / c[3])
+                    };
+                }
+            });
         }
         if a.spring_form {
             self.galerkin_springs(a, masses);
         } else {
+            for b in self.d_blocks.iter_mut().chain(self.o_blocks.iter_mut()) {
+                *b = [[0.0; MAX_PER]; MAX_PER];
+            }
             self.galerkin_blocks(a, pattern);
         }
         self.factorize_coarse()
@@ -545,52 +808,6 @@ impl<C: Coord> RigidAggregation<C> {
         }
     }
 
-    /// The contribution of spring `e` = (i, j) with B = u uᵀ + s I when a contact projects i or j
-    /// (3-D): (Sᵢ Rᵢ − S_j R_j)ᵀ B (Sᵢ Rᵢ − S_j R_j) inside one aggregate; Rᵢᵀ Sᵢ B Sᵢ Rᵢ and
-    /// R_jᵀ S_j B S_j R_j on the diagonals and −Rᵢᵀ Sᵢ B S_j R_j between two.
-    fn add_projected_spring(&mut self, e: usize, i: usize, j: usize, u: [f64; 3], s: f64) {
-        let b: [[f64; 3]; 3] =
-            std::array::from_fn(|r| std::array::from_fn(|c| u[r] * u[c] + if r == c { s } else { 0.0 }));
-        let identity: [[f64; 3]; 3] =
-            std::array::from_fn(|r| std::array::from_fn(|c| if r == c { 1.0 } else { 0.0 }));
-        let si = if self.projected[i] { self.projector[i] } else { identity };
-        let sj = if self.projected[j] { self.projector[j] } else { identity };
-        let b_ii = mat3_mul(&mat3_mul(&si, &b), &si);
-        let b_jj = mat3_mul(&mat3_mul(&sj, &b), &sj);
-        let b_ij = mat3_mul(&mat3_mul(&si, &b), &sj);
-        let (gi, gj) = (self.agg[i], self.agg[j]);
-        let (li, lj) = (self.lever[i], self.lever[j]);
-        if gi != NONE {
-            add_galerkin_block(&mut self.d_blocks[gi as usize], li, &b_ii);
-        }
-        if gj != NONE {
-            add_galerkin_block(&mut self.d_blocks[gj as usize], lj, &b_jj);
-        }
-        if gi == NONE || gj == NONE {
-            return;
-        }
-        let m = galerkin3(li, &b_ij, lj);
-        if gi == gj {
-            let d = &mut self.d_blocks[gi as usize];
-            for p in 0..MAX_PER {
-                for q in 0..MAX_PER {
-                    d[p][q] -= m[p][q] + m[q][p];
-                }
-            }
-        } else {
-            let o = &mut self.o_blocks[self.pair_of[e] as usize];
-            for p in 0..MAX_PER {
-                for q in 0..MAX_PER {
-                    if self.flip[e] {
-                        o[q][p] -= m[p][q];
-                    } else {
-                        o[p][q] -= m[p][q];
-                    }
-                }
-            }
-        }
-    }
-
     /// Rᵀ A R from a spring-form A = M + Σ_e B_e (e_i − e_j)(e_i − e_j)ᵀ, B_e = u uᵀ + a I: the masses
     /// give m_i Rᵢᵀ Rᵢ; a spring inside one aggregate (Rᵢ − R_j)ᵀ B (Rᵢ − R_j), which moves only the
     /// rotations (Rᵢ − R_j = [S(x_i − x_j) | 0]); a spring between two aggregates Rᵢᵀ B Rᵢ and R_jᵀ B R_j
@@ -599,133 +816,78 @@ impl<C: Coord> RigidAggregation<C> {
     /// between a spring's diagonal and pair terms inside an aggregate). A spring between aggregates adds
     /// its B to a per-coordinate sum, and each coordinate's Rᵢᵀ (Σ B) Rᵢ is added once: a sixth less
     /// set-up on the standard sheet than one Rᵢᵀ B Rᵢ per spring end.
+    ///
+    /// On every core, with the same bits on any thread count: each coarse block is summed by one
+    /// thread from the lists of [`Self::aggregate`] (an aggregate's members and the springs that touch
+    /// it, a coarse pair's springs, a coordinate's springs), in the order of one serial pass — the masses,
+    /// then the springs in pattern order, then the per-coordinate sums.
     fn galerkin_springs(&mut self, a: &SystemMatrix<C>, masses: &[f64]) {
         let per = self.per;
-        let comps =
-            |c: C| -> [f64; 3] { std::array::from_fn(|k| if k < C::DIM { c.component(k) } else { 0.0 }) };
-        // Σ m_i Rᵢᵀ Rᵢ: the levers are taken from the aggregate's mass centre, so Σ m_i S(l_i) = 0 and
-        // only the inertia tensor Σ m (|l|² I − l lᵀ) and the mass Σ m I remain.
-        for (i, &m) in masses.iter().enumerate() {
-            let g = self.agg[i];
-            if g != NONE {
-                if self.projected[i] {
-                    // m Rᵢᵀ Sᵢ Rᵢ (a projector is idempotent), as m Rᵢᵀ (Sᵢ − I) Rᵢ on top of the
-                    // unconstrained term below: the closed form leaves out the rotation–translation
-                    // terms m S(lᵢ), which only cancel over the whole aggregate.
-                    if per == 1 {
-                        self.d_blocks[g as usize][0][0] += m * (self.projector[i][0][0] - 1.0);
-                    } else {
-                        let sm: [[f64; 3]; 3] = std::array::from_fn(|r| {
-                            std::array::from_fn(|c| {
-                                m * (self.projector[i][r][c] - if r == c { 1.0 } else { 0.0 })
-                            })
-                        });
-                        add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &sm);
-                    }
-                }
-                let d = &mut self.d_blocks[g as usize];
-                if per == 1 {
-                    d[0][0] += m;
-                } else {
-                    let l = self.lever[i];
-                    let l2 = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-                    for p in 0..3 {
-                        for q in 0..3 {
-                            d[p][q] -= m * l[p] * l[q];
-                        }
-                        d[p][p] += m * l2;
-                        d[p + 3][p + 3] += m;
-                    }
-                }
-            }
-        }
         if per == MAX_PER {
-            self.across.clear();
             self.across.resize(masses.len(), [0.0; 6]);
-        }
-        for (e, &super::SpringBlock { i, j, u, a: s }) in a.springs.iter().enumerate() {
-            let (i, j) = (i as usize, j as usize);
-            let (gi, gj) = (self.agg[i], self.agg[j]);
-            let u = comps(u);
-            if per == 1 {
-                // Scalar projectors are 0 or 1.
-                let (pi, pj) = (
-                    if self.projected[i] { self.projector[i][0][0] } else { 1.0 },
-                    if self.projected[j] { self.projector[j][0][0] } else { 1.0 },
-                );
-                let b = u[0] * u[0] + s;
-                if gi == gj {
-                    if gi != NONE && (pi != 1.0 || pj != 1.0) {
-                        self.d_blocks[gi as usize][0][0] += (pi - pj) * b * (pi - pj);
-                    }
-                    continue;
-                }
-                for (g, p) in [(gi, pi), (gj, pj)] {
-                    if g != NONE {
-                        self.d_blocks[g as usize][0][0] += p * b * p;
+            let terms = GalerkinTerms {
+                per,
+                agg: &self.agg,
+                lever: &self.lever,
+                projected: &self.projected,
+                projector: &self.projector,
+                flip: &self.flip,
+                springs: &a.springs,
+                masses,
+                across: &[],
+            };
+            let (incident, start) = (&self.incident, &self.incident_start);
+            parallel::for_chunks_min(&mut self.across, 1024, |s, out| {
+                for (k, sum) in out.iter_mut().enumerate() {
+                    let i = s + k;
+                    *sum = [0.0; 6];
+                    if terms.agg[i] != NONE {
+                        terms.add_across(&incident[start[i] as usize..start[i + 1] as usize], sum);
                     }
                 }
-                if gi != NONE && gj != NONE {
-                    self.o_blocks[self.pair_of[e] as usize][0][0] -= pi * b * pj;
+            });
+        }
+        let terms = GalerkinTerms {
+            per,
+            agg: &self.agg,
+            lever: &self.lever,
+            projected: &self.projected,
+            projector: &self.projector,
+            flip: &self.flip,
+            springs: &a.springs,
+            masses,
+            across: &self.across,
+        };
+        let (members, member_start) = (&self.members, &self.member_start);
+        let (touching, touching_start) = (&self.agg_springs, &self.agg_spring_start);
+        parallel::for_chunks_min(&mut self.d_blocks, 8, |s, out| {
+            for (k, d) in out.iter_mut().enumerate() {
+                let g = s + k;
+                *d = [[0.0; MAX_PER]; MAX_PER];
+                let members = &members[member_start[g] as usize..member_start[g + 1] as usize];
+                for &i in members {
+                    terms.add_mass(i as usize, d);
                 }
-                continue;
-            }
-            if self.projected[i] || self.projected[j] {
-                self.add_projected_spring(e, i, j, u, s);
-                continue;
-            }
-            if gi == gj {
-                if gi == NONE {
-                    continue;
+                for &e in &touching[touching_start[g] as usize..touching_start[g + 1] as usize] {
+                    terms.add_spring_to_diagonal(g as u32, e as usize, d);
                 }
-                // (Rᵢ − R_j)ᵀ B (Rᵢ − R_j) with Rᵢ − R_j = [K | 0], K = S(x_i − x_j): rotations only.
-                let (li, lj) = (self.lever[i], self.lever[j]);
-                let k = skew(std::array::from_fn(|c| li[c] - lj[c]));
-                let w: [f64; 3] = std::array::from_fn(|p| k[0][p] * u[0] + k[1][p] * u[1] + k[2][p] * u[2]);
-                let d = &mut self.d_blocks[gi as usize];
-                for p in 0..3 {
-                    for q in 0..3 {
-                        d[p][q] +=
-                            w[p] * w[q] + s * (k[0][p] * k[0][q] + k[1][p] * k[1][q] + k[2][p] * k[2][q]);
+                if per == MAX_PER {
+                    for &i in members {
+                        terms.add_across_to_diagonal(i as usize, d);
                     }
                 }
-                continue;
             }
-            // B summed per end for Rᵢᵀ (Σ B) Rᵢ on the diagonals (below), and −Rᵢᵀ B R_j between.
-            let b =
-                [u[0] * u[0] + s, u[1] * u[1] + s, u[2] * u[2] + s, u[0] * u[1], u[0] * u[2], u[1] * u[2]];
-            for k in [i, j] {
-                let sum = &mut self.across[k];
-                for c in 0..6 {
-                    sum[c] += b[c];
+        });
+        let (between, between_start) = (&self.pair_springs, &self.pair_spring_start);
+        parallel::for_chunks_min(&mut self.o_blocks, 32, |s, out| {
+            for (k, o) in out.iter_mut().enumerate() {
+                let p = s + k;
+                *o = [[0.0; MAX_PER]; MAX_PER];
+                for &e in &between[between_start[p] as usize..between_start[p + 1] as usize] {
+                    terms.add_spring_between(e as usize, o);
                 }
             }
-            if gi != NONE && gj != NONE {
-                let (li, lj) = (self.lever[i], self.lever[j]);
-                let (vi, vj) = (modes_of(li, u), modes_of(lj, u));
-                let o = &mut self.o_blocks[self.pair_of[e] as usize];
-                // The coarse pair is stored as (lower aggregate, higher aggregate).
-                if self.flip[e] {
-                    add_galerkin(o, lj, li, &vj, &vi, s, -1.0);
-                } else {
-                    add_galerkin(o, li, lj, &vi, &vj, s, -1.0);
-                }
-            }
-        }
-        if per == MAX_PER {
-            for (i, c) in self.across.iter().enumerate() {
-                let g = self.agg[i];
-                if g == NONE || c.iter().all(|&v| v == 0.0) {
-                    continue;
-                }
-                let mut b = [[c[0], c[3], c[4]], [c[3], c[1], c[5]], [c[4], c[5], c[2]]];
-                if self.projected[i] {
-                    let p = &self.projector[i];
-                    b = mat3_mul(&mat3_mul(p, &b), p);
-                }
-                add_galerkin_block(&mut self.d_blocks[g as usize], self.lever[i], &b);
-            }
-        }
+        });
     }
 
     /// Assembles the coarse blocks into the scalar matrix and factorises it.
@@ -871,7 +1033,11 @@ mod tests {
     /// A spring-form matrix on a jittered 6 × 6 grid with row, column and skip-one springs and one
     /// prescribed corner, held both as blocks and as springs.
     fn spring_system() -> System {
-        let n = 6;
+        spring_system_of(6)
+    }
+
+    /// [`spring_system`] on an n × n grid.
+    fn spring_system_of(n: usize) -> System {
         let id = |i: usize, j: usize| (j * n + i) as u32;
         let mut pattern = Vec::new();
         for j in 0..n {
@@ -924,6 +1090,38 @@ mod tests {
         assert!(close(&from_springs.s_diag, &from_blocks.s_diag), "diagonal");
         assert!(close(&from_springs.s_off, &from_blocks.s_off), "off-diagonal");
         assert!(from_blocks.s_off.iter().any(|v| v.abs() > 1e-3 * scale), "a coarse matrix with couplings");
+    }
+
+    /// The coarse blocks are summed one a thread from fixed lists: the same bits on one thread and on
+    /// four, with contacts projecting some coordinates (a grid large enough for every loop of the
+    /// set-up to split).
+    #[test]
+    fn the_coarse_matrix_is_the_same_bits_on_any_thread_count() {
+        let (a, pattern, masses, prescribed, x) = spring_system_of(48);
+        let n = masses.len();
+        let identity = DVec3::block_identity(1.0);
+        let normal = DVec3::new(0.3, -0.2, 0.9).normalize();
+        let sliding = DVec3::block_combine(identity, 1.0, DVec3::block_outer(normal, normal), -1.0);
+        let proj: Vec<_> = (0..n)
+            .map(|i| match (i % 7, i % 11) {
+                (0, _) => sliding,
+                (_, 0) => DVec3::block_identity(0.0),
+                _ => identity,
+            })
+            .collect();
+        let coarse = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut agg = RigidAggregation::<DVec3>::new(1, 1);
+                agg.update(&a, &pattern, &masses, &prescribed, &x, Filter::Projected(&proj)).unwrap();
+                assert!(agg.n_agg >= 64 && n >= 2048, "too small to split: {} aggregates", agg.n_agg);
+                let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                (bits(&agg.s_diag), bits(&agg.s_off))
+            })
+        };
+        let one = coarse(1);
+        assert!(one == coarse(4), "the coarse matrix depends on the thread count");
+        assert!(one == coarse(3), "the coarse matrix depends on the thread count");
     }
 
     #[test]
