@@ -14,7 +14,7 @@ use anyhow::{Context, Result, bail};
 use crate::drape::object_meshes;
 use crate::run::SolveOptions;
 use crate::run::body::{Figures, Posed, build_character};
-use crate::run::sheet::Cloth;
+use crate::run::sheet::new_cloth;
 use crate::simulation::Deformable;
 
 /// Any cloth model, through the contract every one keeps (sendable: the Python package steps it with
@@ -39,8 +39,8 @@ impl ClothSim {
     pub fn new(scene: &Scene, solve: &SolveOptions) -> Result<Self> {
         let (mut model, triangles, obstacles, kind): (ClothModel, _, _, _) = match scene {
             Scene::Sheet(s) => {
-                let (sim, triangles) = Cloth::new(s, false)?;
-                (sim.into_model(), triangles, Vec::new(), "sheet")
+                let (sim, triangles) = new_cloth(s, false)?;
+                (sim, triangles, Vec::new(), "sheet")
             }
             Scene::Flex3d(l) => {
                 let world = Flex3dWorld::new(&l.scene, l.meshes()).context("building the scene")?;

@@ -63,16 +63,10 @@ pub fn run(
     {
         bail!("the reference has {} vertices, the sheet {n} particles", r.len());
     }
-    let (mut sim, triangles) = Cloth::new(scene, opts.parallel)?;
-    let (n_springs, n_triangles) = match &sim {
-        Cloth::Springs(s) => (s.network.springs().len(), 0),
-        Cloth::Membrane(m) => (0, m.membrane.n_triangles()),
-    };
-    let threads = match &sim {
-        Cloth::Springs(s) => s.threads(),
-        Cloth::Membrane(_) => 1,
-    };
-    opts.solve.configure(sim.model_mut().stepper_mut());
+    let (mut sim, triangles) = new_cloth(scene, opts.parallel)?;
+    let (n_springs, n_triangles) = sim.springs_and_triangles();
+    let threads = sim.threads();
+    opts.solve.configure(sim.stepper_mut());
     let mut warnings = Vec::new();
     let pinned: Vec<bool> = {
         let mut p = vec![false; n];
@@ -82,7 +76,7 @@ pub fn run(
         p
     };
     let v = vec![DVec3::ZERO; n];
-    let x0 = sim.model().positions().to_vec();
+    let x0 = sim.positions().to_vec();
     // 200 iterations: 60 underestimated ω_max of the 256 × 256 sheet, whose spectrum is dense at the top.
     let (omega, zeta) =
         anima_ode::stability::max_frequency_and_damping(sim.system(), 0.0, &x0, &v, &pinned, 200);
@@ -115,7 +109,7 @@ pub fn run(
         Some(_) => {
             let up = UpAxis::against(scene.sheet.gravity, UpAxis::PlusZ);
             let mut e = GltfExport::cloth(up, &[], &[("sheet", n, &triangles)], n_frames)?;
-            e.deforming_frame(0, sim.model().time(), |_| sim.model().positions());
+            e.deforming_frame(0, sim.time(), |_| sim.positions());
             Some(e)
         }
         None => None,
@@ -127,9 +121,8 @@ pub fn run(
             ("kinetic energy".to_owned(), "J"),
             ("self-intersections".to_owned(), "crossing pairs"),
         ]);
-        let crossings =
-            anima_geom::count_self_intersections_within(sim.model().positions(), &triangles, None);
-        f.push(0.0, &[Some(kinetic_energy(&sim, scene)), crossings.ok().map(|c| c as f64)]);
+        let crossings = anima_geom::count_self_intersections_within(sim.positions(), &triangles, None);
+        f.push(0.0, &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.ok().map(|c| c as f64)]);
         f
     });
     progress.begin(n_steps as u64);
@@ -146,7 +139,7 @@ pub fn run(
         // frame starting at the step the last one ended with; at most ADAPTIVE_STEP_BUDGET times the
         // fixed-step count, so that a stiff sheet the controller crawls through ends on its own.
         let mut stepper = Stepper::new(scene.integrator, n);
-        let mut state = State::new(sim.model().positions().to_vec(), sim.model().velocities().to_vec());
+        let mut state = State::new(sim.positions().to_vec(), sim.velocities().to_vec());
         let mut scratch = State::zeros(n);
         let budget = (ADAPTIVE_STEP_BUDGET * n_steps.max(1)) as u64;
         let (mut t, mut h, mut taken, mut evaluations) = (0.0, scene.dt_s, 0u64, 0usize);
@@ -174,20 +167,25 @@ pub fn run(
                     break;
                 }
             }
-            sim.model_mut().set_state(&state.x, &state.v);
+            sim.set_state(&state.x, &state.v);
             if let Err(e) = sim.check_bounds_at(taken, t) {
                 error = Some(e.to_string());
                 break;
             }
             frames = k;
-            let crossings = watch.look(sim.model().positions(), &triangles);
+            let crossings = watch.look(sim.positions(), &triangles);
             if let Some(f) = &mut series {
-                output.time(|| f.push(t, &[Some(kinetic_energy(&sim, scene)), crossings.map(|c| c as f64)]));
+                output.time(|| {
+                    f.push(
+                        t,
+                        &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.map(|c| c as f64)],
+                    )
+                });
             }
             progress.advance(((t / scene.duration_s) * n_steps as f64) as u64);
             crate::interrupt::check()?;
             output.time(|| {
-                let frame = Frame { k, t, x: sim.model().positions(), triangles: &triangles };
+                let frame = Frame { k, t, x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
             if taken > budget && k < n_frames {
@@ -199,9 +197,7 @@ pub fn run(
                 break;
             }
         }
-        if let Cloth::Springs(s) = &mut sim {
-            s.stats.evaluations = evaluations;
-        }
+        sim.set_evaluations(evaluations);
         adaptive_steps = Some((taken, t));
     } else {
         for k in 1..=n_frames {
@@ -210,23 +206,27 @@ pub fn run(
             } else {
                 ((k as f64 / (scene.frame_rate_hz * scene.dt_s)).round() as usize).min(n_steps)
             };
-            let left = (target as u64).saturating_sub(sim.model().steps());
-            if let Err(e) = sim.model_mut().run(left) {
+            let left = (target as u64).saturating_sub(sim.steps());
+            if let Err(e) = sim.run(left) {
                 diverged = e.is_non_finite();
                 error = Some(e.to_string());
                 break;
             }
             frames = k;
-            let crossings = watch.look(sim.model().positions(), &triangles);
+            let crossings = watch.look(sim.positions(), &triangles);
             if let Some(f) = &mut series {
-                let t = sim.model().time();
-                output.time(|| f.push(t, &[Some(kinetic_energy(&sim, scene)), crossings.map(|c| c as f64)]));
+                let t = sim.time();
+                output.time(|| {
+                    f.push(
+                        t,
+                        &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.map(|c| c as f64)],
+                    )
+                });
             }
-            progress.advance(sim.model().steps());
+            progress.advance(sim.steps());
             crate::interrupt::check()?;
             output.time(|| {
-                let frame =
-                    Frame { k, t: sim.model().time(), x: sim.model().positions(), triangles: &triangles };
+                let frame = Frame { k, t: sim.time(), x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
         }
@@ -234,9 +234,9 @@ pub fn run(
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
     let output_seconds = output.seconds();
     progress.end();
-    let x = sim.model().positions();
+    let x = sim.positions();
     watch.look(x, &triangles);
-    let (steps, simulated_seconds) = adaptive_steps.unwrap_or((sim.model().steps(), sim.model().time()));
+    let (steps, simulated_seconds) = adaptive_steps.unwrap_or((sim.steps(), sim.time()));
     super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
@@ -246,7 +246,7 @@ pub fn run(
         simulated_seconds,
         wall_seconds,
         output_seconds,
-        all_finite: !diverged && x.iter().chain(sim.model().velocities()).all(|p| p.is_finite()),
+        all_finite: !diverged && x.iter().chain(sim.velocities()).all(|p| p.is_finite()),
         error,
         warnings,
         self_intersections: Some(watch.largest),
@@ -267,8 +267,8 @@ pub fn run(
                 (x.iter().zip(r).map(|(a, b)| a.distance_squared(*b)).sum::<f64>() / n as f64).sqrt()
             }),
             max_strain: sim.max_strain(x),
-            max_speed: sim.model().velocities().iter().map(|v| v.length()).fold(0.0, f64::max),
-            kinetic_energy: kinetic_energy(&sim, scene),
+            max_speed: sim.velocities().iter().map(|v| v.length()).fold(0.0, f64::max),
+            kinetic_energy: sim.kinetic_energy(scene.sheet.total_mass),
             solver_iterations: sim.solver_iterations(),
         }),
     };
@@ -279,7 +279,7 @@ pub fn run(
         f.write(dir)?;
     }
     if let Some(dir) = opts.picture_dir() {
-        write_pictures(dir, x, sim.model().time(), &snapshots, &triangles)?;
+        write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
     }
     Ok(summary)
 }
@@ -288,20 +288,6 @@ pub fn run(
 /// `dt_s`), but not without bound: a sheet the step controller crawls through is stopped past this
 /// multiple of `duration_s / dt_s` accepted steps, with a message saying so.
 const ADAPTIVE_STEP_BUDGET: usize = 100;
-
-/// The sheet's kinetic energy now, J.
-fn kinetic_energy(sim: &Cloth, scene: &SheetScene) -> f64 {
-    let n = scene.sheet.n * scene.sheet.n;
-    match sim {
-        // Equal particles: ½ (M/n) Σ v².
-        Cloth::Springs(s) => {
-            0.5 * scene.sheet.total_mass / n as f64
-                * s.state.v.iter().map(|v| v.length_squared()).sum::<f64>()
-        }
-        // A third of each triangle's mass at each corner.
-        Cloth::Membrane(m) => m.membrane.kinetic_energy(&m.state.v),
-    }
-}
 
 /// One output frame of a sheet run: written as OBJ, added to the glTF export, and kept for the
 /// pictures when `snapshot` is given.
@@ -336,111 +322,129 @@ impl Frame<'_> {
     }
 }
 
-/// The cloth of a sheet scene, in either model (also what [`crate::sim::ClothSim`] steps).
-#[derive(Debug)]
-pub(crate) enum Cloth {
-    Springs(Box<NetworkSim>),
-    Membrane(Box<MembraneSim>),
+/// The cloth of a sheet scene, in either model (also what [`crate::sim::ClothSim`] steps): the contract
+/// every cloth model keeps, and what a sheet run reads of its model beyond it.
+pub(crate) trait SheetCloth: Deformable<Error = StepError> + Send + Sync {
+    /// Springs of a spring sheet, triangles of a membrane (0 for the other).
+    fn springs_and_triangles(&self) -> (usize, usize);
+    /// Threads the forces are evaluated on ([`RunOptions::parallel`]).
+    fn threads(&self) -> usize;
+    /// The model as an ODE system, for a run that integrates it itself (the adaptive methods) and for
+    /// the stability estimate.
+    fn system(&mut self) -> &mut dyn OdeSystem<Coord = DVec3>;
+    /// Takes the bounds from the state as it is now (for a run that integrates the system itself).
+    fn restart_bounds(&mut self);
+    /// Checks the state as it is now against the model's bounds, at the caller's step count and time.
+    fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError>;
+    fn centre_of_mass(&self, x: &[DVec3]) -> DVec3;
+    /// The largest spring strain, or the largest principal strain of a membrane triangle.
+    fn max_strain(&self, x: &[DVec3]) -> f64;
+    /// The kinetic energy now, J, of a sheet of `total_mass` kg.
+    fn kinetic_energy(&self, total_mass: f64) -> f64;
+    fn solver_iterations(&self) -> usize;
+    /// Records the force evaluations of a run that integrated the system itself.
+    fn set_evaluations(&mut self, evaluations: usize);
 }
 
-impl Cloth {
-    /// The scene's cloth at rest and its triangles (the frames' faces); `parallel` as
-    /// [`RunOptions::parallel`].
-    pub(crate) fn new(scene: &SheetScene, parallel: bool) -> Result<(Self, Vec<[u32; 3]>)> {
-        let sheet = &scene.sheet;
-        Ok(match scene.model {
-            SheetModel::Springs => {
-                let mut net = sheet.build()?;
-                // The implicit steps evaluate their forces with the system, spring by spring, on one
-                // thread.
-                net.parallel = parallel
-                    && sheet.n * sheet.n >= super::parallel_min_particles(scene.integrator)
-                    && !scene.integrator.is_implicit();
-                let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s)?;
-                (Cloth::Springs(Box::new(sim)), grid_triangles(sheet.n, sheet.n))
-            }
-            SheetModel::Membrane(material) => {
-                let spec = MembraneSheetSpec {
-                    n: sheet.n,
-                    size: sheet.size,
-                    height: sheet.height,
-                    total_mass: sheet.total_mass,
-                    material,
-                    pinned: sheet.pinned.clone(),
-                    gravity: sheet.gravity,
-                };
-                let sim = MembraneSim::new(spec.build()?, spec.positions(), scene.integrator, scene.dt_s)?;
-                (Cloth::Membrane(Box::new(sim)), spec.triangles())
-            }
-        })
-    }
+pub(crate) type Cloth = Box<dyn SheetCloth>;
 
-    /// The model, through the contract every cloth model keeps.
-    pub(crate) fn model(&self) -> &dyn Deformable<Error = StepError> {
-        match self {
-            Cloth::Springs(s) => s.as_ref(),
-            Cloth::Membrane(m) => m.as_ref(),
+/// The scene's cloth at rest and its triangles (the frames' faces); `parallel` as
+/// [`RunOptions::parallel`].
+pub(crate) fn new_cloth(scene: &SheetScene, parallel: bool) -> Result<(Cloth, Vec<[u32; 3]>)> {
+    let sheet = &scene.sheet;
+    Ok(match scene.model {
+        SheetModel::Springs => {
+            let mut net = sheet.build()?;
+            // The implicit steps evaluate their forces with the system, spring by spring, on one
+            // thread.
+            net.parallel = parallel
+                && sheet.n * sheet.n >= super::parallel_min_particles(scene.integrator)
+                && !scene.integrator.is_implicit();
+            let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s)?;
+            (Box::new(sim), grid_triangles(sheet.n, sheet.n))
         }
-    }
-
-    pub(crate) fn model_mut(&mut self) -> &mut dyn Deformable<Error = StepError> {
-        match self {
-            Cloth::Springs(s) => s.as_mut(),
-            Cloth::Membrane(m) => m.as_mut(),
+        SheetModel::Membrane(material) => {
+            let spec = MembraneSheetSpec {
+                n: sheet.n,
+                size: sheet.size,
+                height: sheet.height,
+                total_mass: sheet.total_mass,
+                material,
+                pinned: sheet.pinned.clone(),
+                gravity: sheet.gravity,
+            };
+            let sim = MembraneSim::new(spec.build()?, spec.positions(), scene.integrator, scene.dt_s)?;
+            (Box::new(sim), spec.triangles())
         }
-    }
+    })
+}
 
-    pub(crate) fn into_model(self) -> crate::sim::ClothModel {
-        match self {
-            Cloth::Springs(s) => s,
-            Cloth::Membrane(m) => m,
-        }
+impl SheetCloth for NetworkSim {
+    fn springs_and_triangles(&self) -> (usize, usize) {
+        (self.network.springs().len(), 0)
     }
-
-    /// Takes the bounds from the state as it is now (for a run that integrates the system itself).
-    fn restart_bounds(&mut self) {
-        match self {
-            Cloth::Springs(s) => s.restart_bounds(),
-            Cloth::Membrane(m) => m.restart_bounds(),
-        }
+    fn threads(&self) -> usize {
+        NetworkSim::threads(self)
     }
-
-    /// Checks the state as it is now against the model's bounds, at the caller's step count and time.
-    fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError> {
-        match self {
-            Cloth::Springs(s) => Ok(s.check_bounds_at(step, time)?),
-            Cloth::Membrane(m) => m.check_bounds_at(step, time),
-        }
-    }
-
     fn system(&mut self) -> &mut dyn OdeSystem<Coord = DVec3> {
-        match self {
-            Cloth::Springs(s) => &mut s.network,
-            Cloth::Membrane(m) => &mut m.membrane,
-        }
+        &mut self.network
     }
-
+    fn restart_bounds(&mut self) {
+        NetworkSim::restart_bounds(self)
+    }
+    fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError> {
+        Ok(NetworkSim::check_bounds_at(self, step, time)?)
+    }
     fn centre_of_mass(&self, x: &[DVec3]) -> DVec3 {
-        match self {
-            Cloth::Springs(s) => s.network.centre_of_mass(x),
-            Cloth::Membrane(m) => m.membrane.centre_of_mass(x),
-        }
+        self.network.centre_of_mass(x)
     }
-
-    /// The largest spring strain, or the largest principal strain of a membrane triangle.
     fn max_strain(&self, x: &[DVec3]) -> f64 {
-        match self {
-            Cloth::Springs(s) => s.network.max_strain(x),
-            Cloth::Membrane(m) => m.membrane.max_strain(x),
-        }
+        self.network.max_strain(x)
     }
-
+    /// Equal particles: ½ (M/n) Σ v².
+    fn kinetic_energy(&self, total_mass: f64) -> f64 {
+        let v = &self.state.v;
+        0.5 * total_mass / v.len() as f64 * v.iter().map(|v| v.length_squared()).sum::<f64>()
+    }
     fn solver_iterations(&self) -> usize {
-        match self {
-            Cloth::Springs(s) => s.stats.solver_iterations,
-            Cloth::Membrane(m) => m.solver_iterations,
-        }
+        self.stats.solver_iterations
     }
+    fn set_evaluations(&mut self, evaluations: usize) {
+        self.stats.evaluations = evaluations;
+    }
+}
+
+impl SheetCloth for MembraneSim {
+    fn springs_and_triangles(&self) -> (usize, usize) {
+        (0, self.membrane.n_triangles())
+    }
+    fn threads(&self) -> usize {
+        1
+    }
+    fn system(&mut self) -> &mut dyn OdeSystem<Coord = DVec3> {
+        &mut self.membrane
+    }
+    fn restart_bounds(&mut self) {
+        MembraneSim::restart_bounds(self)
+    }
+    fn check_bounds_at(&self, step: u64, time: f64) -> Result<(), StepError> {
+        MembraneSim::check_bounds_at(self, step, time)
+    }
+    fn centre_of_mass(&self, x: &[DVec3]) -> DVec3 {
+        self.membrane.centre_of_mass(x)
+    }
+    fn max_strain(&self, x: &[DVec3]) -> f64 {
+        self.membrane.max_strain(x)
+    }
+    /// A third of each triangle's mass at each corner.
+    fn kinetic_energy(&self, _total_mass: f64) -> f64 {
+        self.membrane.kinetic_energy(&self.state.v)
+    }
+    fn solver_iterations(&self) -> usize {
+        self.solver_iterations
+    }
+    /// A membrane keeps no count of force evaluations.
+    fn set_evaluations(&mut self, _evaluations: usize) {}
 }
 
 fn write_pictures(
