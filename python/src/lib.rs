@@ -179,17 +179,6 @@ type Mesh<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<u32>>);
 /// What a pickled [`Evaluator`] holds: its objective (RON), parameter indices and controller (RON).
 type EvaluatorState = (String, Vec<usize>, String);
 
-/// The scene's own duration, s.
-fn duration_of(scene: &Scene) -> f64 {
-    match scene {
-        Scene::Flex3d(l) => l.scene.duration_s,
-        Scene::Sheet(s) => s.duration_s,
-        Scene::Oliveira(l) => l.scene.duration_s,
-        Scene::Body(l) => l.scene.duration,
-        Scene::Character(l) => l.scene.duration,
-    }
-}
-
 /// A cloth of any kind anima simulates — a spring sheet, FLEX3D surfaces, an Oliveira drape (remeshed
 /// or not) — to step from Python. Positions and velocities are `(n, 3)` float64 arrays in metres and
 /// m/s, in the scene's axes (z up for sheets and drapes, y up for FLEX3D scripts).
@@ -214,7 +203,7 @@ impl std::fmt::Debug for Cloth {
 impl Cloth {
     fn from_scene(scene: &Scene) -> PyResult<Self> {
         let sim = ClothSim::new(scene, &SolveOptions::default()).map_err(simulation_error)?;
-        Ok(Self { sim, duration: duration_of(scene) })
+        Ok(Self { sim, duration: scene.duration_s() })
     }
 
     fn build(
@@ -480,7 +469,7 @@ fn load(py: Python<'_>, path: PathBuf, gravity: Option<[f64; 3]>) -> PyResult<Py
     match scene {
         Scene::Body(_) | Scene::Character(_) => {
             let sim = FigureSim::new(&scene).map_err(simulation_error)?;
-            Ok(Py::new(py, Figure { sim, duration: duration_of(&scene) })?.into_any())
+            Ok(Py::new(py, Figure { sim, duration: scene.duration_s() })?.into_any())
         }
         _ => Ok(Py::new(py, Cloth::from_scene(&scene)?)?.into_any()),
     }

@@ -11,6 +11,7 @@ use anima_format::ron_text::struct_name;
 use anima_format::{FieldError, utf8};
 use anima_geom::obt::{IndexBase, read_obt};
 use anima_geom::{DVec3, TriangleMesh, read_obj};
+use anima_ode::Integrator;
 
 use crate::body::LoadedBody;
 use crate::character::{CharacterScene, LoadedCharacter};
@@ -77,6 +78,27 @@ impl Scene {
             Scene::Oliveira(_) => SceneKind::Oliveira,
             Scene::Body(_) => SceneKind::Body,
             Scene::Character(_) => SceneKind::Character,
+        }
+    }
+
+    /// The scene's own duration, s (what `anima run` runs without `--duration`).
+    pub fn duration_s(&self) -> f64 {
+        match self {
+            Scene::Flex3d(l) => l.scene.duration_s,
+            Scene::Sheet(s) => s.duration_s,
+            Scene::Oliveira(l) => l.scene.duration_s,
+            Scene::Body(l) => l.scene.duration,
+            Scene::Character(l) => l.scene.duration,
+        }
+    }
+
+    /// The cloth's time-stepping method; `None` for figures, which Rapier steps.
+    pub fn integrator(&self) -> Option<Integrator> {
+        match self {
+            Scene::Flex3d(l) => Some(l.scene.integrator),
+            Scene::Sheet(s) => Some(s.integrator),
+            Scene::Oliveira(l) => Some(l.scene.integrator),
+            Scene::Body(_) | Scene::Character(_) => None,
         }
     }
 
