@@ -823,19 +823,19 @@ impl<C: Coord> RigidAggregation<C> {
     /// then the springs in pattern order, then the per-coordinate sums.
     fn galerkin_springs(&mut self, a: &SystemMatrix<C>, masses: &[f64]) {
         let per = self.per;
+        let terms = GalerkinTerms {
+            per,
+            agg: &self.agg,
+            lever: &self.lever,
+            projected: &self.projected,
+            projector: &self.projector,
+            flip: &self.flip,
+            springs: &a.springs,
+            masses,
+            across: &[],
+        };
         if per == MAX_PER {
             self.across.resize(masses.len(), [0.0; 6]);
-            let terms = GalerkinTerms {
-                per,
-                agg: &self.agg,
-                lever: &self.lever,
-                projected: &self.projected,
-                projector: &self.projector,
-                flip: &self.flip,
-                springs: &a.springs,
-                masses,
-                across: &[],
-            };
             let (incident, start) = (&self.incident, &self.incident_start);
             parallel::for_chunks_min(&mut self.across, 1024, |s, out| {
                 for (k, sum) in out.iter_mut().enumerate() {
@@ -847,17 +847,7 @@ impl<C: Coord> RigidAggregation<C> {
                 }
             });
         }
-        let terms = GalerkinTerms {
-            per,
-            agg: &self.agg,
-            lever: &self.lever,
-            projected: &self.projected,
-            projector: &self.projector,
-            flip: &self.flip,
-            springs: &a.springs,
-            masses,
-            across: &self.across,
-        };
+        let terms = GalerkinTerms { across: &self.across, ..terms };
         let (members, member_start) = (&self.members, &self.member_start);
         let (touching, touching_start) = (&self.agg_springs, &self.agg_spring_start);
         parallel::for_chunks_min(&mut self.d_blocks, 8, |s, out| {
