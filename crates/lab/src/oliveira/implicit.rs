@@ -66,6 +66,7 @@ use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::oliveira::{AdaptiveCloth, ContactVelocity, StepRule};
 use anima_geom::DVec3;
 use anima_ode::{Integrator, LinearSolver};
+use anima_run::run::SolveOptions;
 use anima_viz::{LinePlot, Series, SeriesStyle};
 use anyhow::{Context, Result};
 
@@ -81,20 +82,18 @@ pub const CONVERGED_NEWTON: usize = 8;
 pub struct Method {
     pub integrator: Integrator,
     pub rule: StepRule,
-    pub solver: Option<LinearSolver>,
     pub strain_limit: Option<f64>,
     pub contact_velocity: ContactVelocity,
     pub contact: ContactMode,
-    /// Newton iterations per step of an implicit method (`None`: the integrator's default).
-    pub newton: Option<usize>,
     /// Friction off on the cloth and on every object (the model-gap and attribution studies).
     pub frictionless: bool,
     /// Restitution 0: contacts do not bounce (the attribution study).
     pub inelastic: bool,
     /// Gravity scaled by this factor: 1, or [`PERTURBED_GRAVITY`] in the sensitivity study.
     pub gravity_scale: f64,
-    /// Generalised-α's ρ∞ (`None`: the stepper's default), for the attribution study.
-    pub rho_inf: Option<f64>,
+    /// The linear solver, Newton iterations per step and generalised-α's ρ∞ (the attribution
+    /// study's) of an implicit method (`None`: the stepper's default), as `anima run` takes them.
+    pub solve: SolveOptions,
 }
 
 /// The perturbation of the sensitivity study: gravity scaled by 1 + 10⁻⁹, a change far below any
@@ -110,15 +109,13 @@ impl Method {
         Self {
             integrator: Integrator::Rk4,
             rule: StepRule::Provot { beta, startup_dt_s: Some(1e-4) },
-            solver: None,
             strain_limit: None,
             contact_velocity: ContactVelocity::StartOfStep,
             contact: ContactMode::AfterStep,
-            newton: None,
             frictionless: false,
             inelastic: false,
             gravity_scale: 1.0,
-            rho_inf: None,
+            solve: SolveOptions::default(),
         }
     }
 
@@ -127,15 +124,13 @@ impl Method {
         Self {
             integrator,
             rule: StepRule::Fixed { dt_s },
-            solver: None,
             strain_limit: None,
             contact_velocity: ContactVelocity::EndOfStep,
             contact: ContactMode::AfterStep,
-            newton: None,
             frictionless: false,
             inelastic: false,
             gravity_scale: 1.0,
-            rho_inf: None,
+            solve: SolveOptions::default(),
         }
     }
 
@@ -144,12 +139,18 @@ impl Method {
         Self { contact: ContactMode::InSolve, ..Self::implicit(Integrator::GeneralizedAlpha, dt_s) }
     }
 
+    /// The same method with `k` Newton iterations a step.
+    pub fn with_newton(mut self, k: usize) -> Self {
+        self.solve.newton_iterations = Some(k);
+        self
+    }
+
     pub fn label(&self) -> String {
         let mut s = self.integrator.to_string();
-        if let Some(LinearSolver::SparseCholesky) = self.solver {
+        if let Some(LinearSolver::SparseCholesky) = self.solve.linear_solver {
             s.push_str("+cholesky");
         }
-        if let Some(r) = self.rho_inf {
+        if let Some(r) = self.solve.rho_inf {
             let _ = write!(s, " ρ∞ = {r}");
         }
         if self.inelastic {
@@ -163,7 +164,7 @@ impl Method {
         }
         if self.contact == ContactMode::InSolve {
             s.push_str(", contact in the solve");
-            if let Some(k) = self.newton {
+            if let Some(k) = self.solve.newton_iterations {
                 let _ = write!(s, ", {k} Newton iterations");
             }
         } else if self.contact_velocity == ContactVelocity::StartOfStep && self.integrator.is_implicit() {
@@ -209,15 +210,7 @@ fn build(repo: &Repo, d: &Drape, m: &Method) -> Result<AdaptiveCloth> {
     }
     loaded.scene.gravity_m_s2 *= m.gravity_scale;
     let mut cloth = loaded.build().with_context(|| format!("building {}", path.display()))?;
-    if let Some(s) = m.solver {
-        cloth.stepper_mut().set_linear_solver(s);
-    }
-    if let Some(r) = m.rho_inf {
-        cloth.stepper_mut().set_spectral_radius(r);
-    }
-    if let Some(k) = m.newton {
-        cloth.stepper_mut().set_newton_iterations(k);
-    }
+    m.solve.configure(cloth.stepper_mut());
     Ok(unremeshed(cloth, loaded.scene.gravity_m_s2))
 }
 
@@ -302,10 +295,7 @@ pub fn worst_rms(a: &[Vec<DVec3>], b: &[Vec<DVec3>]) -> f64 {
 pub fn references() -> [(&'static str, Method); 2] {
     [
         ("rk4-thesis-rule", Method::thesis(1e-3)),
-        (
-            "alpha-in-solve-16000-newton-8",
-            Method { newton: Some(CONVERGED_NEWTON), ..Method::in_solve(1.0 / 16_000.0) },
-        ),
+        ("alpha-in-solve-16000-newton-8", Method::in_solve(1.0 / 16_000.0).with_newton(CONVERGED_NEWTON)),
     ]
 }
 
@@ -338,12 +328,14 @@ fn methods() -> Vec<Method> {
     ] {
         for per_s in steps {
             let solver = if base.integrator == Integrator::GeneralizedAlpha { None } else { cg };
-            methods.push(Method { rule: StepRule::Fixed { dt_s: 1.0 / per_s }, solver, ..base });
+            let mut m = Method { rule: StepRule::Fixed { dt_s: 1.0 / per_s }, ..base };
+            m.solve.linear_solver = solver;
+            methods.push(m);
         }
     }
     // What the default Newton count costs at the steps a user would choose.
     for per_s in [60.0, 120.0, 240.0] {
-        methods.push(Method { newton: Some(CONVERGED_NEWTON), ..Method::in_solve(1.0 / per_s) });
+        methods.push(Method::in_solve(1.0 / per_s).with_newton(CONVERGED_NEWTON));
     }
     methods
 }
@@ -538,7 +530,8 @@ fn attribution_rows(repo: &Repo, d: &Drape, rows: &[Row], out: &mut String) -> R
         let _ = write!(out, "| {} | 1/{per_s:.0} s |", d.short_title);
         for &(law, rho_inf) in &columns {
             let ((_, inelastic, frictionless), reference) = (LAWS[law], &converged[law]);
-            let m = Method { inelastic, frictionless, rho_inf, ..Method::in_solve(1.0 / per_s) };
+            let mut m = Method { inelastic, frictionless, ..Method::in_solve(1.0 / per_s) };
+            m.solve.rho_inf = rho_inf;
             let outcome = match rows.iter().find(|r| r.method == m) {
                 Some(Row { outcome: Some(o), .. }) => o.clone(),
                 _ => {

@@ -104,7 +104,7 @@ impl RunOptions {
 }
 
 /// How an implicit integrator solves its steps; `None` keeps the integrator's default.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SolveOptions {
     pub linear_solver: Option<LinearSolver>,
     /// Generalised-α's spectral radius at infinite frequency ρ∞ in [0, 1] (0: unresolved modes damped in

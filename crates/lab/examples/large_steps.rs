@@ -3,14 +3,14 @@
 //! `main` prints them as Markdown tables.
 //!
 //! ```sh
-//! cargo run --release -p anima-cloth --example large_steps -- spring     # Table 4.1 spring: energy, phase, order
-//! cargo run --release -p anima-cloth --example large_steps -- sheet      # standard sheet N = 64, 1 s
-//! cargo run --release -p anima-cloth --example large_steps -- breakdown  # where a step's time goes
-//! cargo run --release -p anima-cloth --example large_steps -- drapes     # Oliveira's three fine drapes
-//! NEWTON=2 SOLVER=two-level CGTOL=0.03 cargo run --release -p anima-cloth --example large_steps -- probe
+//! cargo run --release -p anima-lab --example large_steps -- spring     # Table 4.1 spring: energy, phase, order
+//! cargo run --release -p anima-lab --example large_steps -- sheet      # standard sheet N = 64, 1 s
+//! cargo run --release -p anima-lab --example large_steps -- breakdown  # where a step's time goes
+//! cargo run --release -p anima-lab --example large_steps -- drapes     # Oliveira's three fine drapes
+//! NEWTON=2 SOLVER=two-level CGTOL=0.03 cargo run --release -p anima-lab --example large_steps -- probe
 //!                                                    # one generalised-α sheet run, set from the environment
 //! QUICK=1 REPEATS=5 …  -- sheet                      # the first four sheet rows only, five alternated runs
-//! cargo run --release -p anima-cloth --example large_steps -- all
+//! cargo run --release -p anima-lab --example large_steps -- all
 //! ```
 //!
 //! References are computed once and cached under `target/anima-lab/large-steps/` (the standard sheet:
@@ -26,48 +26,58 @@ use anima_cloth::network_sim::NetworkSim;
 use anima_cloth::oliveira::{OliveiraCloth, OliveiraScene, ShapeDesc, StepRule};
 use anima_cloth::spring_net::SheetSpec;
 use anima_geom::{DVec3, TriangleMesh, read_obj};
+use anima_lab::run::SolveOptions;
 use anima_ode::{Integrator, LinearSolver, SolveProfile, State, Stepper};
 
 type Error = Box<dyn std::error::Error>;
 
 // ------------------------------------------------------------------------------------------ methods
 
-/// An integrator with the settings a study varies; `None` keeps the stepper's default.
+/// An integrator at a step, with the solver settings a study varies (`None` keeps the stepper's
+/// default, as for `anima run`).
 #[derive(Debug, Clone, Copy)]
 pub struct Method {
     pub integrator: Integrator,
     pub dt: f64,
-    pub solver: Option<LinearSolver>,
-    pub newton: Option<usize>,
-    pub rho_inf: Option<f64>,
+    pub solve: SolveOptions,
 }
 
 impl Method {
     pub fn new(integrator: Integrator, dt: f64) -> Self {
-        Self { integrator, dt, solver: None, newton: None, rho_inf: None }
+        Self { integrator, dt, solve: SolveOptions::default() }
+    }
+
+    /// The same method with another linear solver.
+    fn with_solver(mut self, solver: LinearSolver) -> Self {
+        self.solve.linear_solver = Some(solver);
+        self
+    }
+
+    /// The same method with `k` Newton iterations a step.
+    fn with_newton(mut self, k: usize) -> Self {
+        self.solve.newton_iterations = Some(k);
+        self
+    }
+
+    /// The same method with generalised-α's ρ∞.
+    fn with_rho_inf(mut self, rho_inf: f64) -> Self {
+        self.solve.rho_inf = Some(rho_inf);
+        self
     }
 
     fn configure(&self, stepper: &mut Stepper<DVec3>) {
-        if let Some(s) = self.solver {
-            stepper.set_linear_solver(s);
-        }
-        if let Some(k) = self.newton {
-            stepper.set_newton_iterations(k);
-        }
-        if let Some(r) = self.rho_inf {
-            stepper.set_spectral_radius(r);
-        }
+        self.solve.configure(stepper);
     }
 
     pub fn label(&self) -> String {
         let mut s = self.integrator.to_string();
-        if let Some(r) = self.rho_inf {
+        if let Some(r) = self.solve.rho_inf {
             s += &format!(" ρ∞={r}");
         }
-        if let Some(solver) = self.solver {
+        if let Some(solver) = self.solve.linear_solver {
             s += &format!(" +{}", solver.name());
         }
-        if let Some(k) = self.newton {
+        if let Some(k) = self.solve.newton_iterations {
             s += &format!(" newton={k}");
         }
         s
@@ -474,7 +484,7 @@ pub fn converged_in_solve() -> DrapeMethod {
     // Eight Newton iterations: with the default count the stick/slide regimes do not settle within a
     // step and the runs do not converge as the step shrinks (see anima-lab's `oliveira::implicit`).
     let mut m = DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 16_000.0, ContactMode::InSolve);
-    m.method.newton = Some(8);
+    m.method.solve.newton_iterations = Some(8);
     m
 }
 
@@ -527,23 +537,23 @@ fn sheet_section() -> Result<(), Error> {
     let spec = SheetSpec::standard(64);
     let dt = 1.0 / 60.0;
     let ga = |dt: f64| Method::new(Integrator::GeneralizedAlpha, dt);
-    let two_level = Some(LinearSolver::default_two_level());
+    let two_level = LinearSolver::default_two_level();
     let mut methods = vec![
         Method::new(Integrator::SymplecticEuler, 1e-4),
         ga(dt),
         Method::new(Integrator::SymplecticEuler, 1.5e-4),
-        Method { solver: two_level, newton: Some(4), ..ga(dt) },
+        ga(dt).with_solver(two_level).with_newton(4),
         ga(1.0 / 30.0),
         ga(1.0 / 120.0),
         ga(1.0 / 240.0),
-        Method { newton: Some(3), ..ga(dt) },
-        Method { newton: Some(4), ..ga(dt) },
-        Method { solver: two_level, newton: Some(2), ..ga(dt) },
-        Method { rho_inf: Some(0.0), ..ga(dt) },
-        Method { rho_inf: Some(0.4), ..ga(dt) },
-        Method { solver: Some(LinearSolver::SparseCholesky), newton: Some(8), ..ga(dt) },
-        Method { solver: Some(LinearSolver::SparseCholesky), ..Method::new(Integrator::ImplicitEuler, dt) },
-        Method { solver: Some(LinearSolver::SparseCholesky), ..Method::new(Integrator::Bdf2, dt) },
+        ga(dt).with_newton(3),
+        ga(dt).with_newton(4),
+        ga(dt).with_solver(two_level).with_newton(2),
+        ga(dt).with_rho_inf(0.0),
+        ga(dt).with_rho_inf(0.4),
+        ga(dt).with_solver(LinearSolver::SparseCholesky).with_newton(8),
+        Method::new(Integrator::ImplicitEuler, dt).with_solver(LinearSolver::SparseCholesky),
+        Method::new(Integrator::Bdf2, dt).with_solver(LinearSolver::SparseCholesky),
         Method::new(Integrator::ImplicitEuler, dt),
         Method::new(Integrator::Bdf2, dt),
     ];
@@ -589,20 +599,15 @@ fn breakdown_section() {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let methods = [
-        Method { solver: Some(LinearSolver::SparseCholesky), ..Method::new(Integrator::ImplicitEuler, dt) },
+        Method::new(Integrator::ImplicitEuler, dt).with_solver(LinearSolver::SparseCholesky),
         Method::new(Integrator::ImplicitEuler, dt),
-        Method { solver: Some(LinearSolver::SparseCholesky), ..Method::new(Integrator::Bdf2, dt) },
+        Method::new(Integrator::Bdf2, dt).with_solver(LinearSolver::SparseCholesky),
         Method::new(Integrator::Bdf2, dt),
-        Method {
-            solver: Some(LinearSolver::SparseCholesky),
-            ..Method::new(Integrator::GeneralizedAlpha, dt)
-        },
-        Method { solver: Some(LinearSolver::default_cg()), ..Method::new(Integrator::GeneralizedAlpha, dt) },
-        Method {
-            solver: Some(LinearSolver::default_two_level()),
-            newton: Some(4),
-            ..Method::new(Integrator::GeneralizedAlpha, dt)
-        },
+        Method::new(Integrator::GeneralizedAlpha, dt).with_solver(LinearSolver::SparseCholesky),
+        Method::new(Integrator::GeneralizedAlpha, dt).with_solver(LinearSolver::default_cg()),
+        Method::new(Integrator::GeneralizedAlpha, dt)
+            .with_solver(LinearSolver::default_two_level())
+            .with_newton(4),
         Method::new(Integrator::GeneralizedAlpha, dt),
     ];
     for m in methods {
@@ -624,13 +629,13 @@ fn probe_section() -> Result<(), Error> {
     let env = |k: &str| std::env::var(k).ok().and_then(|s| s.parse::<f64>().ok());
     let dt = env("DT").unwrap_or(1.0 / 60.0);
     let mut m = Method::new(Integrator::GeneralizedAlpha, dt);
-    m.newton = env("NEWTON").map(|k| k as usize);
-    m.rho_inf = env("RHO");
+    m.solve.newton_iterations = env("NEWTON").map(|k| k as usize);
+    m.solve.rho_inf = env("RHO");
     if let Ok(name) = std::env::var("SOLVER") {
-        m.solver = Some(name.parse()?);
+        m.solve.linear_solver = Some(name.parse()?);
     }
     if let Some(tolerance) = env("CGTOL") {
-        m.solver = match m.solver.unwrap_or(LinearSolver::default_aggregation()) {
+        m.solve.linear_solver = match m.solve.linear_solver.unwrap_or(LinearSolver::default_aggregation()) {
             LinearSolver::TwoLevel { max_iterations, .. } => {
                 Some(LinearSolver::TwoLevel { tolerance, max_iterations })
             }
@@ -671,13 +676,10 @@ fn drapes_section() -> Result<(), Error> {
     let alpha_60 = DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 60.0, contact_in);
     let methods = [
         alpha_60,
-        DrapeMethod { method: Method { rho_inf: Some(0.0), ..alpha_60.method }, ..alpha_60 },
-        DrapeMethod { method: Method { rho_inf: Some(0.4), ..alpha_60.method }, ..alpha_60 },
-        DrapeMethod { method: Method { newton: Some(8), ..alpha_60.method }, ..alpha_60 },
-        DrapeMethod {
-            method: Method { solver: Some(LinearSolver::SparseCholesky), ..alpha_60.method },
-            ..alpha_60
-        },
+        DrapeMethod { method: alpha_60.method.with_rho_inf(0.0), ..alpha_60 },
+        DrapeMethod { method: alpha_60.method.with_rho_inf(0.4), ..alpha_60 },
+        DrapeMethod { method: alpha_60.method.with_newton(8), ..alpha_60 },
+        DrapeMethod { method: alpha_60.method.with_solver(LinearSolver::SparseCholesky), ..alpha_60 },
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 120.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 240.0, contact_in),
         DrapeMethod::fixed(Integrator::GeneralizedAlpha, 1.0 / 1000.0, contact_in),
@@ -798,8 +800,8 @@ fn drape_probe_section() -> Result<(), Error> {
         env("DT").unwrap_or(1.0 / 60.0),
         ContactMode::InSolve,
     );
-    m.method.newton = env("NEWTON").map(|k| k as usize);
-    m.method.rho_inf = env("RHO");
+    m.method.solve.newton_iterations = env("NEWTON").map(|k| k as usize);
+    m.method.solve.rho_inf = env("RHO");
     let out = run_drape(&scene, &meshes, &m, &snaps, true)?;
     let per = |r: &[Vec<DVec3>]| {
         out.snapshots
