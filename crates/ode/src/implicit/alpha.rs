@@ -58,7 +58,7 @@ pub const DEFAULT_RHO_INF: f64 = 0.2;
 /// Newton iterations per step when none is set (the planned ones; more can run while contacts change
 /// regime, [`DEFAULT_REGIME_ITERATIONS`]). Measured on the standard sheet (N = 64, 1 s at 1/60 s) with
 /// the default solver (rigid-aggregation CG to a relative residual of 0.1 per iteration; `cargo run
-/// --release -p anima-cloth --example large_steps -- probe`, with `NEWTON=k`, before the spring-form matrix): 2
+/// --release -p anima-lab --example large_steps -- probe`, with `NEWTON=k`, before the spring-form matrix): 2
 /// iterations err 6.5 mm at the centre of mass (34 mm RMS per particle against RK4 at 10⁻⁵ s) in 8.5 ms
 /// per step, 3 iterations 13 mm (28 mm RMS) in 11.4 ms. Three, because two are not enough on the very
 /// stiff sheet of the hard cases (k = 10⁵ N/m, `implicit_hard_cases`): its largest strain reaches 11.6 % with two (7.8 % with
