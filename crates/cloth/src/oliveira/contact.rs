@@ -4,8 +4,8 @@
 //! and Anderson (2002), and restarts from where it began the step.
 
 use anima_geom::{DVec3, Solid};
-use anima_ode::State;
 use anima_ode::contact::{Contact, ContactModel};
+use anima_ode::{State, parallel};
 
 use super::scene::{ContactVelocity, Options, SeparatingContact};
 
@@ -194,6 +194,8 @@ pub const SOLVE_CONTACT_THICKNESS_M: f64 = 1e-4;
 pub struct ClearanceCache {
     reference: Vec<DVec3>,
     clearance: Vec<f64>,
+    /// Per particle, the contact the last query found (scratch, listed in particle order after it).
+    found: Vec<Option<Contact<DVec3>>>,
 }
 
 impl ClearanceCache {
@@ -203,6 +205,8 @@ impl ClearanceCache {
         self.reference.resize(n, DVec3::ZERO);
         self.clearance.clear();
         self.clearance.resize(n, 0.0);
+        self.found.clear();
+        self.found.resize(n, None);
     }
 }
 
@@ -221,76 +225,86 @@ pub struct SolveContacts<'a> {
 }
 
 impl ContactModel<DVec3> for SolveContacts<'_> {
+    /// Every particle's query on its own, on every core (`anima_ode::parallel`), the contacts then listed
+    /// in particle order: the same list on any thread count.
     fn contacts(&mut self, start: &[DVec3], end: &[DVec3], out: &mut Vec<Contact<DVec3>>) {
         let thickness = SOLVE_CONTACT_THICKNESS_M;
         if self.cache.reference.len() != start.len() {
             self.cache.reset(start.len());
         }
-        for i in 0..start.len() {
-            let (a, b) = (start[i], end[i]);
-            // Every point of the path lies within max(|a − r|, |b − r|) of the reference point r.
-            let r = self.cache.reference[i];
-            let reach = a.distance(r).max(b.distance(r));
-            if self.cache.clearance[i] - reach > thickness {
-                continue;
-            }
-            let found = match first_hit(self.colliders, a, b) {
-                Some((s, normal, k)) => Some((a + (b - a) * s, normal, k)),
-                // Within twice the thickness: a resting particle is found at once and keeps its regime.
-                None => self.nearest(b, 2.0 * thickness),
-            };
-            match found {
-                Some((surface, normal, k)) => {
-                    self.cache.reference[i] = b;
-                    self.cache.clearance[i] = 0.0;
-                    out.push(Contact {
-                        coordinate: i as u32,
-                        normal,
-                        point: surface + normal * thickness,
-                        static_friction: 0.5 * (self.friction + self.colliders[k].friction),
-                        kinetic_friction: 0.5 * (self.friction + self.colliders[k].friction),
-                        restitution: self.restitution,
-                    });
+        let (colliders, friction, restitution) = (self.colliders, self.friction, self.restitution);
+        let cache = &mut *self.cache;
+        let ClearanceCache { reference, clearance, found } = cache;
+        parallel::for_chunks3(reference, clearance, found, |s, reference, clearance, found| {
+            for (k, ((reference, clearance), found)) in
+                reference.iter_mut().zip(clearance.iter_mut()).zip(found.iter_mut()).enumerate()
+            {
+                let i = s + k;
+                *found = None;
+                let (a, b) = (start[i], end[i]);
+                // Every point of the path lies within max(|a − r|, |b − r|) of the reference point r.
+                let reach = a.distance(*reference).max(b.distance(*reference));
+                if *clearance - reach > thickness {
+                    continue;
                 }
-                None => {
-                    let d = self.colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
-                    self.cache.reference[i] = b;
-                    // A little less than the distance, so round-off in it cannot let a path through.
-                    self.cache.clearance[i] = d * (1.0 - 1e-9) - 1e-12;
+                let hit = match first_hit(colliders, a, b) {
+                    Some((s, normal, k)) => Some((a + (b - a) * s, normal, k)),
+                    // Within twice the thickness: a resting particle is found at once and keeps its
+                    // regime.
+                    None => nearest(colliders, b, 2.0 * thickness),
+                };
+                *reference = b;
+                match hit {
+                    Some((surface, normal, k)) => {
+                        *clearance = 0.0;
+                        let mu = 0.5 * (friction + colliders[k].friction);
+                        *found = Some(Contact {
+                            coordinate: i as u32,
+                            normal,
+                            point: surface + normal * thickness,
+                            static_friction: mu,
+                            kinetic_friction: mu,
+                            restitution,
+                        });
+                    }
+                    None => {
+                        let d = colliders.iter().map(|o| o.solid.clearance(b)).fold(f64::INFINITY, f64::min);
+                        // A little less than the distance, so round-off in it cannot let a path through.
+                        *clearance = d * (1.0 - 1e-9) - 1e-12;
+                    }
                 }
             }
-        }
+        });
+        out.extend(cache.found.iter().flatten());
     }
 }
 
-impl SolveContacts<'_> {
-    /// The surface point nearest to `p`, its outward normal and the object, when `p` is inside an object
-    /// or closer than `thickness` to one (the deepest or nearest first).
-    fn nearest(&self, p: DVec3, thickness: f64) -> Option<(DVec3, DVec3, usize)> {
-        let mut best: Option<(f64, DVec3, DVec3, usize)> = None;
-        for (k, o) in self.colliders.iter().enumerate() {
-            // (A half-space's clearance is its unsigned distance, so the inside test comes first.)
-            if !o.solid.contains(p) && o.solid.clearance(p) > thickness {
-                continue;
-            }
-            let prox = o.solid.proximity(p);
-            let signed = if prox.inside { -prox.distance } else { prox.distance };
-            if signed > thickness || best.is_some_and(|(d, ..)| d <= signed) {
-                continue;
-            }
-            let away = if prox.inside { prox.point - p } else { p - prox.point };
-            let normal = match away.try_normalize() {
-                Some(n) => n,
-                // On the surface: the normal of the face the segment from the object's inside meets.
-                None => o
-                    .solid
-                    .segment_hit(p - DVec3::Z * thickness, p + DVec3::Z * thickness)
-                    .map_or(DVec3::Z, |h| h.normal),
-            };
-            best = Some((signed, prox.point, normal, k));
+/// The surface point nearest to `p`, its outward normal and the object, when `p` is inside an object or
+/// closer than `thickness` to one (the deepest or nearest first).
+fn nearest(colliders: &[Collider], p: DVec3, thickness: f64) -> Option<(DVec3, DVec3, usize)> {
+    let mut best: Option<(f64, DVec3, DVec3, usize)> = None;
+    for (k, o) in colliders.iter().enumerate() {
+        // (A half-space's clearance is its unsigned distance, so the inside test comes first.)
+        if !o.solid.contains(p) && o.solid.clearance(p) > thickness {
+            continue;
         }
-        best.map(|(_, point, normal, k)| (point, normal, k))
+        let prox = o.solid.proximity(p);
+        let signed = if prox.inside { -prox.distance } else { prox.distance };
+        if signed > thickness || best.is_some_and(|(d, ..)| d <= signed) {
+            continue;
+        }
+        let away = if prox.inside { prox.point - p } else { p - prox.point };
+        let normal = match away.try_normalize() {
+            Some(n) => n,
+            // On the surface: the normal of the face the segment from the object's inside meets.
+            None => o
+                .solid
+                .segment_hit(p - DVec3::Z * thickness, p + DVec3::Z * thickness)
+                .map_or(DVec3::Z, |h| h.normal),
+        };
+        best = Some((signed, prox.point, normal, k));
     }
+    best.map(|(_, point, normal, k)| (point, normal, k))
 }
 
 /// Approximate vertex normals (§4.5.1.3): the sum of the unit normals of the triangles around each
@@ -382,6 +396,54 @@ mod tests {
         // As printed: the normal part turns into the surface and friction speeds the slide up.
         let lit = contact_velocity(v, DVec3::Z, 0.5, 0.4, SeparatingContact::Literal);
         assert!((lit - DVec3::new(1.3, 0.0, -0.25)).length() < 1e-15, "{lit}");
+    }
+
+    /// The in-solve contact queries run over the particles on every core: the contacts found, their
+    /// order and the clearance cache are the same on one thread as on two and four (a cloud large
+    /// enough to split, around a ball on a floor, queried twice so that the cache is read too).
+    #[test]
+    fn solve_contacts_are_the_same_on_any_thread_count() {
+        use anima_geom::{HalfSpace, Sphere};
+        let colliders = [
+            Collider {
+                name: "ball".into(),
+                solid: Solid::Sphere(Sphere { centre: DVec3::ZERO, radius: 0.25 }),
+                friction: 0.2,
+            },
+            Collider {
+                name: "floor".into(),
+                solid: Solid::HalfSpace(HalfSpace { point: DVec3::new(0.0, 0.0, -0.25), normal: DVec3::Z }),
+                friction: 0.4,
+            },
+        ];
+        let n = 12_000;
+        let wobble = |k: usize, s: f64| ((k as f64 + 1.0) * s).sin();
+        let start: Vec<DVec3> = (0..n)
+            .map(|k| {
+                let dir = DVec3::new(wobble(k, 1.3), wobble(k, 2.7), wobble(k, 0.9)).normalize_or(DVec3::Z);
+                dir * (0.25 + 0.01 * wobble(k, 5.1))
+            })
+            .collect();
+        let end: Vec<DVec3> =
+            start.iter().enumerate().map(|(k, p)| *p * (1.0 - 0.02 * wobble(k, 3.3))).collect();
+        let query = |threads: usize| {
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+                let mut cache = ClearanceCache::default();
+                let mut model = SolveContacts {
+                    colliders: &colliders,
+                    friction: 0.3,
+                    restitution: 0.1,
+                    cache: &mut cache,
+                };
+                let (mut first, mut second) = (Vec::new(), Vec::new());
+                model.contacts(&start, &end, &mut first);
+                model.contacts(&end, &start, &mut second);
+                format!("{first:?} {second:?} {:?} {:?}", cache.reference, cache.clearance)
+            })
+        };
+        let one = query(1);
+        assert!(one.matches("coordinate").count() > 1000, "too few contacts to test");
+        assert!(one == query(2) && one == query(4), "the contacts depend on the thread count");
     }
 
     #[test]
