@@ -22,10 +22,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anima_cloth::contact_mode::ContactMode;
+use anima_cloth::flex3d::mass_spring::SingleSpring;
 use anima_cloth::network_sim::NetworkSim;
 use anima_cloth::oliveira::{OliveiraCloth, OliveiraScene, ShapeDesc, StepRule};
 use anima_cloth::spring_net::SheetSpec;
 use anima_geom::{DVec3, TriangleMesh, read_obj};
+use anima_lab::oliveira::implicit::{rms_at_material_points, worst_rms};
 use anima_lab::run::SolveOptions;
 use anima_ode::{Integrator, LinearSolver, SolveProfile, State, Stepper};
 
@@ -132,44 +134,6 @@ pub struct SpringRow {
     pub order: f64,
 }
 
-struct Spring;
-
-impl anima_ode::OdeSystem for Spring {
-    type Coord = f64;
-    fn n_coords(&self) -> usize {
-        1
-    }
-    fn acceleration(&mut self, _t: f64, x: &[f64], _v: &[f64], a: &mut [f64]) {
-        a[0] = -(x[0] - 2.0);
-    }
-    fn linearized(&mut self) -> Option<&mut dyn anima_ode::Linearized<f64>> {
-        Some(self)
-    }
-}
-
-impl anima_ode::Linearized<f64> for Spring {
-    fn masses(&self) -> &[f64] {
-        &[1.0]
-    }
-    fn prescribed(&self) -> &[bool] {
-        &[false]
-    }
-    fn pattern(&self) -> &[(u32, u32)] {
-        &[]
-    }
-    fn force_and_jacobians(
-        &mut self,
-        _t: f64,
-        x: &[f64],
-        _v: &[f64],
-        f: &mut [f64],
-        jac: &mut anima_ode::Jacobians<f64>,
-    ) {
-        f[0] = -(x[0] - 2.0);
-        jac.k_diag[0] = -1.0;
-    }
-}
-
 fn spring_run(integrator: Integrator, rho: Option<f64>, h: f64, steps: usize) -> State<f64> {
     let mut st = Stepper::new(integrator, 1);
     if let Some(r) = rho {
@@ -178,7 +142,7 @@ fn spring_run(integrator: Integrator, rho: Option<f64>, h: f64, steps: usize) ->
     let mut now = State::new(vec![4.0], vec![0.0]);
     let mut next = State::zeros(1);
     for k in 0..steps {
-        st.step(&mut Spring, k as f64 * h, h, &now, &mut next).expect("spring step");
+        st.step(&mut SingleSpring::thesis(), k as f64 * h, h, &now, &mut next).expect("spring step");
         std::mem::swap(&mut now, &mut next);
     }
     now
@@ -436,23 +400,6 @@ pub fn run_drape(
         most_inside,
         profile: cloth.stepper_mut().profile(),
     })
-}
-
-/// RMS distance over the 25 material points of the coarse 5 × 5 grid (every fourth vertex of 17 × 17),
-/// as `docs/reproduction/oliveira-implicit.md` measures.
-pub fn rms_at_material_points(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let mut sum = 0.0;
-    for r in (0..17).step_by(4) {
-        for c in (0..17).step_by(4) {
-            sum += a[r * 17 + c].distance_squared(b[r * 17 + c]);
-        }
-    }
-    (sum / 25.0).sqrt()
-}
-
-/// The largest RMS error over the snapshot times.
-pub fn worst_rms(a: &[Vec<DVec3>], b: &[Vec<DVec3>]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| rms_at_material_points(x, y)).fold(0.0, f64::max)
 }
 
 /// A drape reference, cached: the snapshots of `m` (run once).
