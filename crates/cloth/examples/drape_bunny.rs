@@ -2,8 +2,7 @@
 //! contacts inside its solve and the modern self-collision (the builder's defaults):
 //! `cargo run --release -p anima-cloth --example drape_bunny`.
 
-use anima_cloth::oliveira::{OliveiraCloth, UpAxis};
-use anima_geom::{DVec3, read_obj};
+use anima_cloth::prelude::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/bunny.obj");

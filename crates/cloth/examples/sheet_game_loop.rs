@@ -2,10 +2,7 @@
 //! its positions read for drawing and a corner dragged by the "player":
 //! `cargo run --release -p anima-cloth --example sheet_game_loop`.
 
-use anima_cloth::network_sim::NetworkSim;
-use anima_cloth::spring_net::SheetSpec;
-use anima_ode::Integrator;
-use glam::DVec3;
+use anima_cloth::prelude::*;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The standard benchmark sheet (1 m, 0.2 kg) at 32 × 32, pinned at (0, 0) and (31, 0).

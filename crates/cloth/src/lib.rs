@@ -13,6 +13,8 @@
 //! also be kept from passing through itself ([`self_collision`]: repulsion, impact impulses and rigid
 //! impact zones after the step, a modern option beside the theses' responses).
 //!
+//! [`prelude`] holds the models and what they take from the layers below, for one import.
+//!
 //! Knows nothing about rigid bodies or files: colliders are `anima_geom` shapes and meshes handed in by
 //! the caller. Everything is `f64` and stored as flat arrays over all particles of all surfaces.
 //!
@@ -50,6 +52,7 @@ pub mod flex3d;
 pub mod membrane;
 pub mod network_sim;
 pub mod oliveira;
+pub mod prelude;
 pub mod self_collision;
 mod sheet_stencil;
 pub mod spring_net;

@@ -2,8 +2,7 @@
 //! the actuation and world settings it walks with; the scene is loaded, built and stepped for 20 s:
 //! `cargo run --release -p anima-run --example walker`.
 
-use anima_run::run::body::build_character;
-use anima_scene::{LoadOptions, Scene, load};
+use anima_run::prelude::*;
 
 fn main() -> anyhow::Result<()> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/scenes/walk.ron");

@@ -12,6 +12,7 @@
 //! - [`optimise`]: a controller optimisation from a spec file, logged and resumable;
 //! - [`objectives`]: the objectives a spec can name (walking, throwing, the backflip), the figures they
 //!   are measured on, and their trackers, which a character scene's run reports;
+//! - [`prelude`]: the types above a user reaches for first, in one import;
 //! - [`interrupt`]: a request from outside (Python's Ctrl-C) that a long computation stop;
 //! - [`drape`]: the Oliveira cloth's drape loop; [`output`]: files written whole (a temporary file, then
 //!   a rename); [`picture`]: the pictures a run writes.
@@ -42,6 +43,7 @@ pub mod objectives;
 pub mod optimise;
 pub mod output;
 pub mod picture;
+pub mod prelude;
 pub mod run;
 pub mod sim;
 pub mod simulation;
