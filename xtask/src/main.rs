@@ -37,6 +37,8 @@ enum Command {
     /// integrators (oliveira-implicit.md); membrane: mesh convergence of the spring models and of the
     /// continuum membrane (membrane.md).
     /// Nunes 2006 (nunes-results.md): nunes-walk, nunes-throw, nunes-flip, or nunes; beyond the thesis:
+    /// nunes-walk-faithful (the actuation readings scanned for a walker that falls before the thesis's
+    /// search and walks after it; nunes-walk-faithful.md, about two minutes),
     /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
     /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
     /// nunes-simbicon-faithful (SIMBICON as published, unoptimised; nunes-simbicon.md) and
@@ -126,6 +128,7 @@ fn reproduce(
             print!("{}", nunes::optimisers::simbicon(repo, seeds.unwrap_or(5))?);
             return Ok(());
         }
+        "nunes-walk-faithful" => return nunes::faithful_walk::reproduce(repo),
         "nunes-simbicon-faithful" => {
             print!("{}", nunes::faithful::reproduce(repo)?);
             return Ok(());

@@ -1,10 +1,11 @@
 //! The experiments of Nunes 2006 Chapter 6 on anima's bodies and controllers: worlds, evaluators and
 //! fitness functions (spec §7.4, §7.6) in this module; the thesis's optimisation runs beside its numbers
 //! ([`report`], `cargo xtask reproduce nunes`), the optimiser comparisons and the robust and SIMBICON
-//! searches beyond the thesis ([`optimisers`]), SIMBICON as it was published ([`faithful`]), and the
-//! strobe figures ([`figures`]).
+//! searches beyond the thesis ([`optimisers`]), SIMBICON as it was published ([`faithful`]), the
+//! search for a thesis-faithful walker ([`faithful_walk`]), and the strobe figures ([`figures`]).
 
 pub mod faithful;
+pub mod faithful_walk;
 pub mod figures;
 pub mod optimisers;
 pub mod protocol;
@@ -37,10 +38,10 @@ pub use anima_run::objectives::*;
 
 /// The gain multiplier G of the configuration closest to the thesis in which its before-and-after
 /// holds (the walker of `walk.ron` falls at p = 0.25 and the thesis's staged search makes it walk):
-/// implicit springs, 4 sub-steps, the re-authored poses. Found by the scan of
-/// `examples/faithful_walk.rs` (`docs/reproduction/nunes-walk-faithful.md`: the spec's poses walk under
-/// no reading tried; with the re-authored ones G = 26 and 27 fall before and walk after, G ≥ 28 walk
-/// before any search). That the falling-then-walking holds is a property of the scan's choice, not of
+/// implicit springs, 4 sub-steps, the re-authored poses. Found by the scan of [`faithful_walk`]
+/// (`cargo xtask reproduce nunes-walk-faithful`, `docs/reproduction/nunes-walk-faithful.md`: the
+/// spec's poses walk under no reading tried; with the re-authored ones G = 26 and 27 fall before and
+/// walk after, G ≥ 28 walk before any search). That the falling-then-walking holds is a property of the scan's choice, not of
 /// any number of the thesis's.
 pub const FAITHFUL_GAIN: f64 = 27.0;
 

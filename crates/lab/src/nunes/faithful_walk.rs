@@ -1,21 +1,23 @@
-//! Looks for a thesis-faithful walker: actuation, gains, sub-steps and poses as close to Nunes 2006 as
-//! the body allows, such that the unoptimised walker (p = 0.25) falls and the thesis's staged search
-//! (15 global + 30 single-parameter draws, `assets/optimisations/walk.ron`, seed 2006) makes it walk.
-//!
-//! For each configuration it prints the fitness before the search, the best after, and that walker's
-//! mean speed over the 50 s evaluation (Table 6.3: 0 before, 10.5 m after, about 0.21 m/s).
-//!
-//! `cargo run --release -p anima-lab --example faithful_walk` runs every configuration with both pose
-//! sets (the spec's §8.1.2 proposal and the re-authored poses of `walk.ron`) and writes
-//! `docs/reproduction/nunes-walk-faithful.md` (about 20 minutes on two busy cores).
-
-use std::path::Path;
+//! The search for a thesis-faithful walker (`cargo xtask reproduce nunes-walk-faithful`, about two
+//! minutes, `docs/reproduction/nunes-walk-faithful.md`): actuation, gains, sub-steps and poses as close to
+//! Nunes 2006 as the body allows, such that the unoptimised walker (p = 0.25) falls and the thesis's
+//! staged search (15 global + 30 single-parameter draws, `assets/optimisations/walk.ron`, seed 2006)
+//! makes it walk. For each configuration, with both pose sets (the spec's §8.1.2 proposal and the
+//! re-authored poses of `walk.ron`), the fitness before the search, the best after, and that walker's
+//! mean speed over the 50 s evaluation (Table 6.3: 0 before, 10.5 m after, about 0.21 m/s). The scan
+//! chose [`super::FAITHFUL_GAIN`].
 
 use anima_body::{Actuation, BuiltinSkeleton, PdMode, Placement, World};
 use anima_character::{Character, procedures};
 use anima_control::Controller;
 use anima_control::optimise::{RunLog, run};
-use anima_lab::nunes::{self, WalkRules, walk_character, walk_poses};
+use anyhow::{Context as _, Result};
+
+use super::{DT, WalkRules, walk_character, walk_poses};
+use crate::repo::Repo;
+
+/// The report this search writes, under `docs/`.
+pub const REPORT: &str = "reproduction/nunes-walk-faithful.md";
 
 #[derive(Debug, Clone, Copy)]
 struct Config {
@@ -27,19 +29,25 @@ struct Config {
     gravity: f64,
 }
 
-fn character(c: Controller, cfg: Config) -> Character {
-    let settings = anima_body::WorldSettings { gravity: cfg.gravity, ..nunes::world_settings(cfg.substeps) };
-    let mut world = World::new(settings).expect("world");
+fn character(c: Controller, cfg: Config) -> Result<Character> {
+    let settings = anima_body::WorldSettings { gravity: cfg.gravity, ..super::world_settings(cfg.substeps) };
+    let mut world = World::new(settings)?;
     let act =
         Actuation { mode: cfg.mode, gain_scale: cfg.gain, torque_limit_rad: 1.0, brake_rad_s: cfg.brake };
-    let sk = BuiltinSkeleton::Humanoid.load().with_actuation(act).expect("actuation");
-    world.add_model(&sk, Placement::OnGround { dx: 0.0 }).expect("model");
-    Character::new(world, c, procedures(), &[]).expect("character")
+    let sk = BuiltinSkeleton::Humanoid.load().with_actuation(act)?;
+    world.add_model(&sk, Placement::OnGround { dx: 0.0 })?;
+    Ok(Character::new(world, c, procedures(), &[])?)
 }
 
-fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let loaded = anima_scene::load_optimisation(&root.join("assets/optimisations/walk.ron")).expect("spec");
+/// Runs the scan, printing each row as it ends, and writes [`REPORT`].
+pub fn reproduce(repo: &Repo) -> Result<()> {
+    let doc = document(repo)?;
+    repo.write_text(std::path::Path::new("docs").join(REPORT), &doc)
+}
+
+/// The report's text: the scan, run (deterministic, so a test compares it with the committed file).
+pub fn document(repo: &Repo) -> Result<String> {
+    let loaded = anima_scene::load_optimisation(&repo.assets("optimisations/walk.ron"))?;
     let rules = WalkRules::default();
     let g = 9.81;
     let configs: Vec<Config> = [
@@ -73,8 +81,7 @@ fn main() {
     .collect();
     let mut doc = String::from(
         "# A thesis-faithful walker: is there a body on which the thesis's search makes a falling walker walk?\n\n\
-         Written by `cargo run --release -p anima-lab --example faithful_walk` (about 20 minutes); do not edit by \
-         hand.\n\n\
+         Written by `cargo xtask reproduce nunes-walk-faithful` (about two minutes); do not edit by hand.\n\n\
          Nunes 2006 (Table 6.3): the unoptimised walker (p₂ = p₃ = p₅ = p₆ = 0.25) falls; 15 global and 30 \
          single-parameter draws of the staged search make it walk 10.5 m in 50 s (about 0.21 m/s). anima's \
          experiments (`walk.ron`: re-authored poses, implicit springs, gains × 100, 4 physics sub-steps) walk \
@@ -101,17 +108,20 @@ fn main() {
             let fit = |x: &[f64]| {
                 let mut c = controller.clone();
                 c.apply(&ids, x);
-                walk_character(character(c, cfg), 1000, &rules, &[], |_| ()).map_or(0.0, |o| o.fitness())
+                character(c, cfg)
+                    .ok()
+                    .and_then(|ch| walk_character(ch, 1000, &rules, &[], |_| ()).ok())
+                    .map_or(0.0, |o| o.fitness())
             };
-            let mut opt = anima_lab::optimise::optimiser(&loaded, &ids).expect("optimiser");
+            let mut opt = crate::optimise::optimiser(&loaded, &ids)?;
             let mut log = RunLog::default();
-            run(opt.as_mut(), &fit, 46, &mut log).expect("a finite fitness");
+            run(opt.as_mut(), &fit, 46, &mut log)?;
             let before = log.evaluations[0].fitness;
-            let best = log.best().expect("evaluated").clone();
+            let best = log.best().context("no evaluation")?.clone();
             let mut c = controller.clone();
             c.apply(&ids, &best.x);
-            let o = walk_character(character(c, cfg), 1000, &rules, &[], |_| ()).expect("walks");
-            let speed = o.distance / (o.iterations as f64 * nunes::DT);
+            let o = walk_character(character(c, cfg)?, 1000, &rules, &[], |_| ())?;
+            let speed = o.distance / (o.iterations as f64 * DT);
             if before == 0.0 && best.fitness > 0.0 {
                 thesis_like.push(format!(
                     "{poses} poses, {:?} G = {} g = {:.4}: falls before, walks {:.2} m after ({speed:.2} m/s)",
@@ -163,9 +173,5 @@ fn main() {
                 Their walkers are about four times as fast as the thesis's (10.5 m in 50 s, 0.21 m/s), and \
                 with the spec's §8.1.2 poses no reading tried walks at all.\n";
     }
-    let out = root.join("docs/reproduction/nunes-walk-faithful.md");
-    let tmp = out.with_extension("md.tmp");
-    std::fs::write(&tmp, &doc).expect("write");
-    std::fs::rename(&tmp, &out).expect("rename");
-    println!("wrote {}", out.display());
+    Ok(doc)
 }
