@@ -1,12 +1,12 @@
 //! Generated reports stay true: a report whose content does not depend on the machine is regenerated
 //! here and compared with the committed file, the way rust-analyzer checks its generated code.
 //!
-//! Only `docs/reproduction/flex3d-results.md`, the faithful-SIMBICON section of `nunes-simbicon.md` and
-//! `nunes-walk-faithful.md` (a minute) can be checked this way. The others hold wall times
-//! (`oliveira-results.md`, `oliveira-implicit.md`, `oliveira-adaptive.md`, `nunes-results.md`'s run time
-//! per iteration, `benchmarks.md`) or take minutes to an hour to regenerate (`nunes-optimisers.md`, the
-//! SIMBICON-style section of `nunes-simbicon.md`, the adaptive report): their commands rewrite them, and
-//! a partial run rewrites only its own sections.
+//! Only `docs/reproduction/flex3d-results.md`, the faithful-SIMBICON section of `nunes-simbicon.md`,
+//! `nunes-walk-faithful.md` and `nunes-robustness.md` (a minute each) can be checked this way. The
+//! others hold wall times (`oliveira-results.md`, `oliveira-implicit.md`, `oliveira-adaptive.md`,
+//! `nunes-results.md`'s run time per iteration, `benchmarks.md`) or take minutes to an hour to
+//! regenerate (`nunes-optimisers.md`, the SIMBICON-style section of `nunes-simbicon.md`, the adaptive
+//! report): their commands rewrite them, and a partial run rewrites only its own sections.
 
 use anima_cloth::flex3d::FrictionMode;
 use anima_lab::repo::Repo;
@@ -59,6 +59,22 @@ fn the_committed_faithful_walker_scan_is_what_its_command_writes() {
         fresh == committed,
         "docs/reproduction/nunes-walk-faithful.md is stale: run `cargo xtask reproduce nunes-walk-faithful` \
          (or `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
+    );
+}
+
+#[test]
+fn the_committed_robustness_report_is_what_its_command_writes() {
+    use anima_lab::nunes::robustness;
+    let fresh = robustness::document().unwrap();
+    let path = Repo::here().docs(robustness::REPORT);
+    if std::env::var_os("UPDATE_REPORTS").is_some() {
+        std::fs::write(&path, &fresh).unwrap();
+    }
+    let committed = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        fresh == committed,
+        "docs/reproduction/nunes-robustness.md is stale: run `cargo xtask reproduce nunes-robustness` (or \
+         `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
     );
 }
 

@@ -39,7 +39,8 @@ enum Command {
     /// Nunes 2006 (nunes-results.md): nunes-walk, nunes-throw, nunes-flip, or nunes; beyond the thesis:
     /// nunes-walk-faithful (the actuation readings scanned for a walker that falls before the thesis's
     /// search and walks after it; nunes-walk-faithful.md, about two minutes),
-    /// nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
+    /// nunes-robustness (SIMBICON's push, slopes and steps on every committed walker;
+    /// nunes-robustness.md), nunes-optimisers (four optimisers over --seeds seeds), nunes-robust (CMA-ES over pushes,
     /// assets/controllers/walk-robust.ron), nunes-simbicon (the same with balance feedback) and
     /// nunes-simbicon-faithful (SIMBICON as published, unoptimised; nunes-simbicon.md) and
     /// nunes-protocol (CMA-ES for pushes, slopes, steps and 1 m/s, both walker forms over --seeds
@@ -129,6 +130,7 @@ fn reproduce(
             return Ok(());
         }
         "nunes-walk-faithful" => return nunes::faithful_walk::reproduce(repo),
+        "nunes-robustness" => return nunes::robustness::reproduce(repo),
         "nunes-simbicon-faithful" => {
             print!("{}", nunes::faithful::reproduce(repo)?);
             return Ok(());

@@ -2,7 +2,8 @@
 //! fitness functions (spec §7.4, §7.6) in this module; the thesis's optimisation runs beside its numbers
 //! ([`report`], `cargo xtask reproduce nunes`), the optimiser comparisons and the robust and SIMBICON
 //! searches beyond the thesis ([`optimisers`]), SIMBICON as it was published ([`faithful`]), the
-//! search for a thesis-faithful walker ([`faithful_walk`]), and the strobe figures ([`figures`]).
+//! search for a thesis-faithful walker ([`faithful_walk`]), SIMBICON's push, slopes and steps on every
+//! committed walker ([`robustness`]), and the strobe figures ([`figures`]).
 
 pub mod faithful;
 pub mod faithful_walk;
@@ -10,6 +11,7 @@ pub mod figures;
 pub mod optimisers;
 pub mod protocol;
 pub mod report;
+pub mod robustness;
 pub mod speeds;
 
 use anima_body::Actuation;

@@ -7,15 +7,18 @@
 //! Then its terrains: each walker for 60 s on ground that slopes at ±5° and ±10°, and over flights of
 //! 5 cm steps up and down, each beginning 2 m ahead of where it starts.
 //!
-//! `cargo run --release -p anima-lab --example torso_pushes` writes
-//! `docs/reproduction/nunes-robustness.md` (a few minutes).
-
-use std::path::Path;
+//! `cargo xtask reproduce nunes-robustness` writes `docs/reproduction/nunes-robustness.md`.
 
 use anima_body::{BuiltinSkeleton, Ground, Relief, WorldSettings};
 use anima_character::{Character, CharacterError};
 use anima_control::Controller;
-use anima_lab::nunes::{self, Push, faithful, protocol};
+use anyhow::Result;
+
+use super::{self as nunes, Push, faithful, protocol};
+use crate::repo::Repo;
+
+/// The report this study writes, under `docs/`.
+pub const REPORT: &str = "reproduction/nunes-robustness.md";
 
 const STEP: f64 = 5.0;
 const MAX: f64 = 400.0;
@@ -40,7 +43,14 @@ fn on_terrain(c: &Controller, build: BuildOn, relief: Relief) -> (bool, String) 
     }
 }
 
-fn main() {
+/// Runs the study, printing each row as it ends, and writes [`REPORT`].
+pub fn reproduce(repo: &Repo) -> Result<()> {
+    let doc = document()?;
+    repo.write_text(std::path::Path::new("docs").join(REPORT), &doc)
+}
+
+/// The report's text: every committed walker pushed and walked on the terrains.
+pub fn document() -> Result<String> {
     let walkers: [(&str, &str, BuildOn, f64); 6] = [
         (
             "thesis's search (`walk-optimised.ron`)",
@@ -81,7 +91,7 @@ fn main() {
     ];
     let mut doc = String::from(
         "# Robustness: SIMBICON's push, slopes and steps on anima's walkers\n\n\
-         Written by `cargo run --release -p anima-lab --example torso_pushes`; do not edit by hand.\n\n\
+         Written by `cargo xtask reproduce nunes-robustness`; do not edit by hand.\n\n\
          The first part of issue #18's protocol. Yin, Loken & van de Panne (2007) report a SIMBICON walker \
          surviving a push of 350 N for 0.2 s on the torso (70 N·s). Here each committed walker is pushed \
          20 s into its walk, horizontally, on the abdomen at the height of the whole body's centre of mass \
@@ -96,7 +106,7 @@ fn main() {
     let mut everywhere = Vec::new();
     let (at, recovery) = (protocol::PUSH_AT, protocol::PUSH_RECOVERY);
     for (name, file, build_on, mass) in walkers {
-        let c = nunes::controller(file).expect("controller");
+        let c = nunes::controller(file)?;
         let (_, distance) = protocol::walk_on(&c, build_on, Relief::Flat, at + recovery, &[]);
         let speed = distance / ((at + recovery) as f64 * nunes::DT);
         let largest = |push: &dyn Fn(f64) -> Push| protocol::largest_push(&c, build_on, push, STEP, MAX);
@@ -160,9 +170,5 @@ fn main() {
     doc += "The walker searched for the whole protocol (`walk-protocol.ron`, CMA-ES with a speed-tracking \
             score) and the issue's criteria checked against it are in `nunes-protocol.md`; its slope form \
             (`walk-slopes.ron`) in `nunes-slopes.md`.\n";
-    let out = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/reproduction/nunes-robustness.md");
-    let tmp = out.with_extension("md.tmp");
-    std::fs::write(&tmp, &doc).expect("write");
-    std::fs::rename(&tmp, &out).expect("rename");
-    println!("wrote {}", out.display());
+    Ok(doc)
 }
