@@ -440,12 +440,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         anyhow::bail!("--reference applies to sheet scenes only");
     }
     // Solver options apply to the implicit integrators only, ρ∞ and Newton to generalised-α only.
-    let integrator = match &scene {
-        Scene::Flex3d(l) => Some(l.scene.integrator),
-        Scene::Sheet(s) => Some(s.integrator),
-        Scene::Oliveira(l) => Some(l.scene.integrator),
-        Scene::Body(_) | Scene::Character(_) => None,
-    };
+    let integrator = scene.integrator();
     if opts.solve.linear_solver.is_some() && !integrator.is_some_and(Integrator::is_implicit) {
         anyhow::bail!(
             "--linear-solver applies to the implicit integrators only (implicit-euler, bdf2, generalized-alpha)"
