@@ -259,7 +259,8 @@ fn a_figures_link_poses_read_back_from_its_gltf() {
     let dir = scratch("figure");
     let mut scene = load("scenes/stand.ron", 2.0);
     let Scene::Body(body) = &mut scene else { unreachable!() };
-    body.scene.frame_interval = 0.25;
+    body.scene.frame_rate_hz = Some(4.0);
+    body.scene.frame_interval = None;
     let (duration, dt) = (body.scene.duration, body.scene.world.dt);
     run_exporting(&scene, &dir);
     let glb = Glb::read(&dir.join("animation.glb"));

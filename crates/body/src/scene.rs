@@ -53,10 +53,39 @@ pub struct BodyScene {
     /// still reads.
     #[serde(rename = "duration_s", alias = "duration")]
     pub duration: f64,
-    /// Seconds between rendered frames.
-    pub frame_interval: f64,
+    /// Rendered frames per second, as every scene schema spells it (or the older `frame_interval`, in
+    /// seconds between frames, which still reads: give one of the two; [`BodyScene::frame_interval_s`]).
+    #[serde(default, with = "anima_format::optional_number", skip_serializing_if = "Option::is_none")]
+    pub frame_rate_hz: Option<f64>,
+    #[serde(default, with = "anima_format::optional_number", skip_serializing_if = "Option::is_none")]
+    pub frame_interval: Option<f64>,
     pub world: WorldSettings,
     pub models: Vec<ModelEntry>,
+}
+
+/// Seconds between rendered frames from a scene's `frame_rate_hz` or its older `frame_interval`
+/// (exactly one of them, positive and finite); otherwise the field to blame and why.
+pub fn frame_interval_of(
+    frame_rate_hz: Option<f64>,
+    frame_interval: Option<f64>,
+) -> Result<f64, (&'static str, String)> {
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    match (frame_rate_hz, frame_interval) {
+        (Some(r), None) if positive(r) => Ok(1.0 / r),
+        (Some(r), None) => {
+            Err(("frame_rate_hz", format!("expected a positive number of frames a second, found {r}")))
+        }
+        (None, Some(i)) if positive(i) => Ok(i),
+        (None, Some(i)) => {
+            Err(("frame_interval", format!("expected a positive number of seconds, found {i}")))
+        }
+        (Some(_), Some(_)) => {
+            Err(("frame_interval", "give frame_rate_hz or the older frame_interval, not both".to_owned()))
+        }
+        (None, None) => {
+            Err(("frame_rate_hz", "expected the frames a second to render, frame_rate_hz".to_owned()))
+        }
+    }
 }
 
 impl BodyScene {
@@ -83,11 +112,8 @@ impl BodyScene {
                 format!("expected a positive number of seconds, found {}", self.duration),
             );
         }
-        if !(self.frame_interval > 0.0 && self.frame_interval.is_finite()) {
-            return bad(
-                "frame_interval",
-                format!("expected a positive number of seconds, found {}", self.frame_interval),
-            );
+        if let Err((field, why)) = frame_interval_of(self.frame_rate_hz, self.frame_interval) {
+            return bad(field, why);
         }
         if !(self.world.dt > 0.0 && self.world.dt.is_finite()) {
             return bad(
@@ -102,6 +128,12 @@ impl BodyScene {
             return bad("models", "a scene needs at least one model".into());
         }
         Ok(())
+    }
+
+    /// Seconds between rendered frames (NaN for a scene that names neither field; a checked scene
+    /// names one).
+    pub fn frame_interval_s(&self) -> f64 {
+        frame_interval_of(self.frame_rate_hz, self.frame_interval).unwrap_or(f64::NAN)
     }
 
     /// Number of control steps: ⌈duration / Δt⌉ (rounded to the nearest step when within 1e-9).

@@ -13,6 +13,8 @@
 //! [`ron_text::struct_name`] sniffs which struct a RON file holds, so a reader can tell a file's kind
 //! without parsing it twice.
 //!
+//! [`optional_number`] reads and writes a field that may be left out as a plain number.
+//!
 //! [`limits`] holds the largest counts any reader accepts (particles, steps, bodies, states, an
 //! optimiser's population and budget), so that every file kind is checked against the same numbers.
 //!
@@ -32,6 +34,7 @@
 
 mod error;
 pub mod limits;
+pub mod optional_number;
 pub mod ron_path;
 pub mod ron_text;
 

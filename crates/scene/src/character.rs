@@ -43,8 +43,12 @@ pub struct CharacterScene {
     /// reads.
     #[serde(rename = "duration_s", alias = "duration")]
     pub duration: f64,
-    /// Seconds between rendered frames.
-    pub frame_interval: f64,
+    /// Rendered frames per second, as every scene schema spells it (or the older `frame_interval`, in
+    /// seconds between frames, which still reads: give one of the two; [`CharacterScene::frame_interval_s`]).
+    #[serde(default, with = "anima_format::optional_number", skip_serializing_if = "Option::is_none")]
+    pub frame_rate_hz: Option<f64>,
+    #[serde(default, with = "anima_format::optional_number", skip_serializing_if = "Option::is_none")]
+    pub frame_interval: Option<f64>,
     pub world: WorldSettings,
     pub models: Vec<CharacterModel>,
     /// The controller file, relative to the scene file's folder.
@@ -54,6 +58,12 @@ pub struct CharacterScene {
 }
 
 impl CharacterScene {
+    /// Seconds between rendered frames (NaN for a scene that names neither field; a loaded scene
+    /// names one).
+    pub fn frame_interval_s(&self) -> f64 {
+        anima_body::scene::frame_interval_of(self.frame_rate_hz, self.frame_interval).unwrap_or(f64::NAN)
+    }
+
     /// Control iterations in the run.
     pub fn n_steps(&self) -> u64 {
         (self.duration / self.world.dt).round() as u64

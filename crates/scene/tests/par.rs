@@ -591,14 +591,32 @@ mod kinds {
         // A bad value, located.
         let e = at("dt", &walk.replace("dt_s: 0.05,", "dt_s: -0.05,"));
         assert!(e.contains("world.dt_s") && e.contains("line 11, column 9"), "{e}");
-        // The older spellings of the run header (`duration`, the world's `dt`) still read.
-        let old = walk.replace("duration_s:", "duration:").replace("dt_s:", "dt:");
+        // The older spellings of the run header (`duration`, the world's `dt`, `frame_interval` in
+        // seconds) still read.
+        let old = walk
+            .replace("duration_s:", "duration:")
+            .replace("dt_s:", "dt:")
+            .replace("frame_rate_hz: 2.0,", "frame_interval: 0.5,");
         assert!(old.contains("duration:") && old.contains("dt:") && !old.contains("dt_s"));
+        assert!(old.contains("frame_interval:") && !old.contains("frame_rate_hz"));
         let p = write("old-spelling.ron", &old);
         let Ok(Scene::Character(l)) = load(&p, &LoadOptions::default()) else {
             panic!("the old spelling reads")
         };
-        assert_eq!((l.scene.duration, l.scene.world.dt), (50.0, 0.05));
+        assert_eq!((l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s()), (50.0, 0.05, 0.5));
+        let Ok(Scene::Character(new)) = load(&write("new-spelling.ron", &walk), &LoadOptions::default())
+        else {
+            panic!("the scene reads")
+        };
+        assert_eq!(new.scene.frame_interval_s().to_bits(), 0.5f64.to_bits());
+        // One of the two frame clocks, positive.
+        let both = walk.replace("frame_rate_hz: 2.0,", "frame_rate_hz: 2.0,\n    frame_interval: 0.5,");
+        let e = at("both", &both);
+        assert!(e.contains("frame_interval") && e.contains("not both"), "{e}");
+        let e = at("neither", &walk.replace("frame_rate_hz: 2.0,", ""));
+        assert!(e.contains("frame_rate_hz"), "{e}");
+        let e = at("zero-rate", &walk.replace("frame_rate_hz: 2.0,", "frame_rate_hz: 0.0,"));
+        assert!(e.contains("frame_rate_hz") && e.contains("line 9"), "{e}");
     }
 }
 
