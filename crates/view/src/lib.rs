@@ -16,7 +16,8 @@
 //! page's code) and times out a head that does not arrive ([`HEAD_TIMEOUT`]); tiny_http, lighter, reads
 //! a request line or a header without bound and has no timeouts; axum adds routing this fixed table
 //! does not need. A WebSocket for a live run (`--live`, later) would be an HTTP/1 upgrade of one of
-//! these connections (`hyper::upgrade::on` and tokio-tungstenite) on the same runtime.
+//! these connections (`hyper::upgrade::on` and tokio-tungstenite) on the same runtime; what a live
+//! page may say, and the bounded channels between it and the run, are in [`live`] already.
 //!
 //! ```no_run
 //! let server = anima_view::Server::bind(std::path::Path::new("out/walk"), 0).unwrap();
@@ -27,6 +28,7 @@
 //! ```
 
 mod assets;
+pub mod live;
 mod respond;
 
 use std::net::{Ipv4Addr, SocketAddr};
