@@ -15,9 +15,19 @@
 //! [`MAX_HEAD_BYTES`] or with more than 100 header lines gets a 431 before any of it reaches the
 //! page's code) and times out a head that does not arrive ([`HEAD_TIMEOUT`]); tiny_http, lighter, reads
 //! a request line or a header without bound and has no timeouts; axum adds routing this fixed table
-//! does not need. A WebSocket for a live run (`--live`, later) would be an HTTP/1 upgrade of one of
-//! these connections (`hyper::upgrade::on` and tokio-tungstenite) on the same runtime; what a live
-//! page may say, and the bounded channels between it and the run, are in [`live`] already.
+//! does not need.
+//!
+//! A live run (`anima run SCENE --live`, [`Server::bind_live`]) adds one path, `/live`: a WebSocket,
+//! an HTTP/1 upgrade of one of these connections (`hyper::upgrade::on`), spoken by tokio-tungstenite
+//! on the same runtime; what the page may say, and the bounded channels between it and the run, are
+//! in [`live`]. Why tokio-tungstenite: it is maintained, takes an upgraded hyper connection as it is
+//! (`WebSocketStream::from_raw_socket`), bounds a message and a frame before buffering them
+//! ([`MAX_MESSAGE_BYTES`]), and with only its `handshake` feature adds a handful of small pure-Rust
+//! crates (tungstenite, sha1, data-encoding, rand; no TLS, no system library). fastwebsockets, the
+//! other light option made for hyper, is faster on large messages, which a few words of commands
+//! and one frame per message never are; its hyper upgrade helper (the `upgrade` feature) switches
+//! hyper's client on as well, it leaves fragmented messages to a separate wrapper
+//! (`FragmentCollector`), and its licence (Apache-2.0 only) is narrower than the workspace's. A hand-written RFC 6455 framer would be the kind of code this project does not write.
 //!
 //! ```no_run
 //! let server = anima_view::Server::bind(std::path::Path::new("out/walk"), 0).unwrap();
@@ -30,6 +40,7 @@
 mod assets;
 pub mod live;
 mod respond;
+mod socket;
 
 use std::net::{Ipv4Addr, SocketAddr};
 use std::path::{Path, PathBuf};
@@ -42,6 +53,7 @@ use hyper_util::rt::{TokioIo, TokioTimer};
 use tokio::sync::Notify;
 
 pub use assets::RUN_FILES;
+pub use socket::MAX_MESSAGE_BYTES;
 
 /// The most bytes a request's head (request line and headers) may take; hyper answers 431 beyond.
 pub const MAX_HEAD_BYTES: usize = 16 * 1024;
@@ -67,6 +79,17 @@ pub enum ViewError {
 struct Site {
     dir: PathBuf,
     addr: SocketAddr,
+    /// A live run's parameters and channels (`anima run --live`); `None` for a finished run.
+    live: Option<socket::LiveSite>,
+}
+
+/// What a live run gives the server: the parameters the page may set, the run's frames, and where
+/// the page's commands go. See [`live`].
+#[derive(Debug)]
+pub struct Live {
+    pub params: Vec<live::Param>,
+    pub frames: live::FrameReceiver,
+    pub commands: live::CommandSender,
 }
 
 /// A viewer bound to 127.0.0.1, not yet serving. [`Server::run`] serves until its [`Stopper`] is
@@ -100,6 +123,22 @@ impl Server {
         if !dir.join("animation.glb").is_file() {
             return Err(ViewError::NoAnimation(dir.to_path_buf()));
         }
+        Self::bind_inner(dir, port, None)
+    }
+
+    /// Binds 127.0.0.1:`port` for a run still going: the page's WebSocket at `/live` takes the run's
+    /// frames and sends it commands; the run's folder `dir` is served as for a finished run, whatever
+    /// it holds so far.
+    pub fn bind_live(dir: &Path, port: u16, live: Live) -> Result<Server, ViewError> {
+        if !dir.is_dir() {
+            return Err(ViewError::NotAFolder(dir.to_path_buf()));
+        }
+        let Live { params, frames, commands } = live;
+        let live = socket::LiveSite { params, frames: std::sync::Mutex::new(Some(frames)), commands };
+        Self::bind_inner(dir, port, Some(live))
+    }
+
+    fn bind_inner(dir: &Path, port: u16, live: Option<socket::LiveSite>) -> Result<Server, ViewError> {
         let listener = std::net::TcpListener::bind((Ipv4Addr::LOCALHOST, port))
             .and_then(|l| l.set_nonblocking(true).map(|()| l))
             .map_err(|source| ViewError::Bind { port, source })?;
@@ -112,7 +151,7 @@ impl Server {
         Ok(Server {
             runtime,
             listener,
-            site: Arc::new(Site { dir: dir.to_path_buf(), addr }),
+            site: Arc::new(Site { dir: dir.to_path_buf(), addr, live }),
             stop: Arc::new(Notify::new()),
         })
     }
@@ -155,7 +194,12 @@ impl Server {
 async fn serve_connection(stream: tokio::net::TcpStream, site: Arc<Site>) {
     let service = service_fn(move |request| {
         let site = site.clone();
-        async move { Ok::<_, std::convert::Infallible>(respond::respond(&site, &request).await) }
+        async move {
+            if request.uri().path() == "/live" {
+                return Ok::<_, std::convert::Infallible>(socket::upgrade(&site, request));
+            }
+            Ok(respond::respond(&site, &request).await)
+        }
     });
     // A client that breaks the protocol or goes away ends its connection; nothing else to do.
     let _ = http1::Builder::new()
@@ -163,5 +207,6 @@ async fn serve_connection(stream: tokio::net::TcpStream, site: Arc<Site>) {
         .header_read_timeout(HEAD_TIMEOUT)
         .max_buf_size(MAX_HEAD_BYTES)
         .serve_connection(TokioIo::new(stream), service)
+        .with_upgrades()
         .await;
 }

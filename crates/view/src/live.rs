@@ -112,20 +112,48 @@ pub struct Frame {
 }
 
 /// The run's end of the frame channel. See the module docs for why it drops rather than waits.
+/// (tokio's channel: the run offers from its own thread without a runtime, the server awaits.)
 #[derive(Debug)]
 pub struct FrameSender {
-    tx: mpsc::SyncSender<Frame>,
+    tx: tokio::sync::mpsc::Sender<Frame>,
     dropped: usize,
 }
 
 /// The server's end of the frame channel.
 #[derive(Debug)]
-pub struct FrameReceiver(pub mpsc::Receiver<Frame>);
+pub struct FrameReceiver(pub tokio::sync::mpsc::Receiver<Frame>);
 
 /// A bounded frame channel of [`FRAME_QUEUE`] frames.
 pub fn frame_channel() -> (FrameSender, FrameReceiver) {
-    let (tx, rx) = mpsc::sync_channel(FRAME_QUEUE);
+    let (tx, rx) = tokio::sync::mpsc::channel(FRAME_QUEUE);
     (FrameSender { tx, dropped: 0 }, FrameReceiver(rx))
+}
+
+impl Frame {
+    /// The frame as the page reads it from a binary WebSocket message: the index as a little-endian
+    /// u32, the time as a little-endian f64, then the positions as little-endian f32s.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(12 + 4 * self.positions.len());
+        bytes.extend_from_slice(&u32::try_from(self.index).unwrap_or(u32::MAX).to_le_bytes());
+        bytes.extend_from_slice(&self.time_s.to_le_bytes());
+        for x in &self.positions {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+        bytes
+    }
+}
+
+/// The parameters as the page's first message: `{"params":[{"name":…,"value":…,"min":…,"max":…},…]}`.
+pub fn params_json(params: &[Param]) -> String {
+    let items: Vec<String> = params
+        .iter()
+        .map(|p| {
+            let name: String =
+                p.name.chars().filter(|c| c.is_ascii_alphanumeric() || "_-.".contains(*c)).collect();
+            format!("{{\"name\":\"{name}\",\"value\":{},\"min\":{},\"max\":{}}}", p.value, p.min, p.max)
+        })
+        .collect();
+    format!("{{\"params\":[{}]}}", items.join(","))
 }
 
 impl FrameSender {
@@ -235,7 +263,8 @@ mod tests {
         assert_eq!(queued, FRAME_QUEUE);
         assert_eq!(tx.dropped(), 5);
         // The page reads the oldest frames first; the run keeps going after the page has gone.
-        assert_eq!(rx.0.recv().unwrap().index, 0);
+        let mut rx = rx;
+        assert_eq!(rx.0.blocking_recv().unwrap().index, 0);
         drop(rx);
         assert!(!tx.offer(frame(99)));
         assert_eq!(tx.dropped(), 6);

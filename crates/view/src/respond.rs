@@ -57,7 +57,7 @@ pub(crate) async fn respond<B>(site: &Site, request: &Request<B>) -> Response<Bo
 
 /// Refuses a request whose `Host` is not this server (400 without one, 403 for another): a page on
 /// another site that a DNS name rebound to 127.0.0.1 cannot read the run.
-fn host_problem<B>(site: &Site, request: &Request<B>) -> Option<StatusCode> {
+pub(crate) fn host_problem<B>(site: &Site, request: &Request<B>) -> Option<StatusCode> {
     let Some(host) = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()) else {
         return Some(StatusCode::BAD_REQUEST);
     };
