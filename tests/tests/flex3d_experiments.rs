@@ -87,6 +87,32 @@ fn e5_wind_billows_the_sail_downwind() {
     assert!((free.z_extent[19] - 58.0).abs() < 1.0, "z extent at frame 20: {}", free.z_extent[19]);
 }
 
+/// The search of the report's E-5 section: the faithful response tears the sail; reading A-3 as "all
+/// three vertices" keeps it in shape and changes nothing before the sheet first meets itself.
+#[test]
+fn e5_three_vertex_contact_keeps_the_sail_in_shape() {
+    let rows = flex3d::e5_search().unwrap();
+    let row = |start: &str| rows.iter().find(|r| r.reading.name.starts_with(start)).expect(start);
+    let free_peak = row("no self-collision").peak_speed;
+    let faithful = row("faithful");
+    assert!(!faithful.keeps_shape(free_peak), "the faithful response no longer tears the sail: {faithful:?}");
+    assert!(faithful.peak_speed > 2.0 * free_peak, "{faithful:?} against {free_peak}");
+    assert!(faithful.leads_through < 19, "{faithful:?}");
+    for name in ["contact partner: all three vertices", "all three vertices, Δt halved"] {
+        let three = row(name);
+        assert!(three.keeps_shape(free_peak), "{three:?} (peak without collisions {free_peak})");
+        assert_eq!(three.leads_through, 20, "{three:?}");
+    }
+    let three = row("contact partner: all three vertices");
+    assert_eq!(
+        three.extent_12, faithful.extent_12,
+        "the reading must change nothing before the first contact"
+    );
+    assert!(three.responses > 0, "the three-vertex run must still meet itself: {three:?}");
+    // The faithful response tears at half the step too: the step is not the cause.
+    assert!(!row("Δt halved").keeps_shape(free_peak));
+}
+
 #[test]
 fn e6_theatre_curtains_close_and_reopen_without_touching() {
     let t = flex3d::e6_theatre().unwrap();
@@ -107,6 +133,12 @@ fn e6_theatre_curtains_close_and_reopen_without_touching() {
     }
     assert_eq!(t.collisions_with_surfaces, 0, "no force leaves the planes, so no collision may fire");
     assert_eq!(t.max_out_of_plane, 0.0);
+    // The report's E-6 search: not at rest by frame 145, and at the rate the swing decays in the pause
+    // (frames 78–100) rest would take far longer than the 5 s the script leaves after the rails stop.
+    let v = &t.max_speed;
+    assert!(v[144] > 10.0 * flex3d::AT_REST_SPEED, "the curtains came to rest: {}", v[144]);
+    let rest = flex3d::pause_rest_time(v[77], v[99], v[139]);
+    assert!(rest > 20.0, "rest after frame 140 would take only {rest} s");
 }
 
 #[test]

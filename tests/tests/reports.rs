@@ -26,6 +26,17 @@ fn the_committed_flex3d_results_are_what_reproduce_all_writes() {
         "docs/reproduction/flex3d-results.md is stale: run `cargo xtask reproduce all` (or \
          `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
     );
+    // The narrative report shows the E-5 and E-6 searches as the same run writes them.
+    let path = Repo::here().docs(anima_lab::flex3d::report::NARRATIVE);
+    let narrative = std::fs::read_to_string(&path).unwrap();
+    let fresh = anima_lab::flex3d::report::narrative_with(&doc, &narrative).unwrap();
+    if std::env::var_os("UPDATE_REPORTS").is_some() {
+        std::fs::write(&path, &fresh).unwrap();
+    }
+    assert!(
+        fresh == narrative,
+        "docs/reproduction/flex3d.md's E-5/E-6 searches are stale: run `cargo xtask reproduce all`"
+    );
 }
 
 #[test]

@@ -161,6 +161,7 @@ fn reproduce(
     // The committed report is the literal reading's; another reading is printed only.
     if matches!(friction, FrictionMode::Literal) {
         repo.write_report("reproduction/flex3d-results.md", &doc)?;
+        flex3d::report::write_narrative(repo, &doc)?;
     }
     if !failed.is_empty() {
         bail!("criteria did not hold for: {}", failed.join(", "));

@@ -5,8 +5,10 @@
 use std::path::PathBuf;
 
 use anima_cloth::flex3d::mass_spring::{TABLE_4_1_STEPS, TABLE_4_1_THESIS, table_4_1};
-use anima_cloth::flex3d::{FLEX3D_GRAVITY, Flex3dWorld, FrictionMode, ModelOptions};
-use anima_cloth::self_collision::SelfCollisionStats;
+use anima_cloth::flex3d::{
+    ContactApproach, FLEX3D_GRAVITY, Flex3dWorld, FrictionMode, ModelOptions, TranslationMode,
+};
+use anima_cloth::self_collision::{SelfCollisionMode, SelfCollisionStats};
 use anima_geom::{DVec3, count_self_intersections};
 use anima_ode::Integrator;
 use anima_scene::{LoadOptions, LoadedFlex3d};
@@ -293,6 +295,10 @@ pub struct E5Wind {
     /// Self-collision responses up to each frame (the faithful response's).
     pub surface_hits: Vec<u64>,
     pub max_speed_last: f64,
+    /// Largest particle speed at each frame.
+    pub max_speed: Vec<f64>,
+    /// Particle positions at the last frame.
+    pub positions_last: Vec<DVec3>,
     /// The most crossing (edge, triangle) pairs of the sheet with itself after any step (not only at
     /// the frames), and the first step that ended with one.
     pub most_crossings: usize,
@@ -309,7 +315,12 @@ pub fn e5_wind(collisions: bool) -> Result<E5Wind> {
 
 /// E-5 with `edit` applied to the scene's options (the self-collision mode, say).
 pub fn e5_wind_with(edit: impl FnOnce(&mut ModelOptions)) -> Result<E5Wind> {
-    let (loaded, mut world) = ThesisScene::Wind.world(|l| edit(&mut l.scene.options))?;
+    e5_wind_scene(|l| edit(&mut l.scene.options))
+}
+
+/// E-5 with `edit` applied to the loaded scene (options, friction, step).
+pub fn e5_wind_scene(edit: impl FnOnce(&mut LoadedFlex3d)) -> Result<E5Wind> {
+    let (loaded, mut world) = ThesisScene::Wind.world(edit)?;
     let info = world.surfaces()[0].clone();
     let corner = info.grid.index(9, 9);
     let triangles = world.all_triangles();
@@ -319,6 +330,8 @@ pub fn e5_wind_with(edit: impl FnOnce(&mut ModelOptions)) -> Result<E5Wind> {
         min_z: vec![],
         surface_hits: vec![],
         max_speed_last: 0.0,
+        max_speed: vec![],
+        positions_last: vec![],
         most_crossings: 0,
         first_crossing_step: None,
         modern: None,
@@ -339,8 +352,10 @@ pub fn e5_wind_with(edit: impl FnOnce(&mut ModelOptions)) -> Result<E5Wind> {
         out.min_z.push(lo);
         out.free_corner_furthest.push(x[corner].z == hi);
         out.surface_hits.push(world.collision_counts().with_surfaces);
+        out.max_speed.push(world.diagnostics().max_speed);
     }
     out.max_speed_last = world.diagnostics().max_speed;
+    out.positions_last = world.surface_positions(0).to_vec();
     out.modern = world.self_collision_stats();
     Ok(out)
 }
@@ -362,11 +377,18 @@ pub struct E6Theatre {
     pub max_out_of_plane: f64,
     /// Largest particle distance at frame 145 from the settled state of frame 25.
     pub distance_from_hanging: f64,
+    /// Kinetic energy of both curtains at each frame.
+    pub kinetic_energy: Vec<f64>,
 }
 
 pub fn e6_theatre() -> Result<E6Theatre> {
-    let (loaded, mut world) = ThesisScene::TheatreCurtains.world(|_| {})?;
-    let (c_loaded, mut curtain) = ThesisScene::Curtain.world(|_| {})?;
+    e6_theatre_with(|_| {})
+}
+
+/// E-6 with `edit` applied to both the theatre scene and the E-3 curtain it is compared with.
+pub fn e6_theatre_with(edit: impl Fn(&mut LoadedFlex3d)) -> Result<E6Theatre> {
+    let (loaded, mut world) = ThesisScene::TheatreCurtains.world(&edit)?;
+    let (c_loaded, mut curtain) = ThesisScene::Curtain.world(&edit)?;
     let infos = world.surfaces().to_vec();
     let top: Vec<Vec<usize>> = infos.iter().map(|s| (0..s.cols).map(|j| s.offset + j).collect()).collect();
     let start: Vec<DVec3> = world.positions().to_vec();
@@ -374,6 +396,7 @@ pub fn e6_theatre() -> Result<E6Theatre> {
     let mut matches = true;
     let mut closed = [0.0; 2];
     let mut max_speed = Vec::new();
+    let mut kinetic_energy = Vec::new();
     let mut max_out_of_plane = 0.0f64;
     let mut hanging = Vec::new();
     for k in 1..=loaded.scene.n_frames() {
@@ -391,7 +414,9 @@ pub fn e6_theatre() -> Result<E6Theatre> {
                     top[c].iter().map(|&p| (world.positions()[p].x - start[p].x).abs()).fold(0.0, f64::max);
             }
         }
-        max_speed.push(world.diagnostics().max_speed);
+        let d = world.diagnostics();
+        max_speed.push(d.max_speed);
+        kinetic_energy.push(d.kinetic_energy);
         for (s, z) in infos.iter().zip(&plane_z) {
             for p in s.range() {
                 max_out_of_plane = max_out_of_plane.max((world.positions()[p].z - z).abs());
@@ -416,6 +441,201 @@ pub fn e6_theatre() -> Result<E6Theatre> {
             .zip(&hanging)
             .map(|(a, b)| a.distance(*b))
             .fold(0.0, f64::max),
+        kinetic_energy,
+    })
+}
+
+// ---------------------------------------------------------------------------------------- E-5, E-6
+
+/// One reading of an ambiguity the thesis leaves open, as an edit of the loaded scene. Every reading
+/// is a switch that already exists; the faithful defaults are untouched.
+#[derive(Clone, Copy)]
+pub struct Reading {
+    /// What the reading changes, with the spec's ambiguity it answers.
+    pub name: &'static str,
+    pub edit: fn(&mut LoadedFlex3d),
+}
+
+impl std::fmt::Debug for Reading {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+/// The readings searched for E-5: the self-collision response (A-3, S7.3 #4), friction (A-2, S3.7),
+/// the wind, the step, and, for contrast, no self-collisions (the spec's numbers) and anima's
+/// modern response.
+pub const E5_READINGS: [Reading; 10] = [
+    Reading { name: "faithful (spec defaults)", edit: |_| {} },
+    Reading {
+        name: "contact partner: all three vertices (A-3)",
+        edit: |l| l.scene.options.contact = ContactApproach::ThreeVertices,
+    },
+    Reading {
+        name: "friction viscous −μv (A-2)", edit: |l| l.scene.friction.mode = FrictionMode::Viscous
+    },
+    Reading { name: "friction clamp (S3.7 [EXT])", edit: |l| l.scene.options.friction_clamp = true },
+    Reading {
+        name: "three vertices and viscous friction",
+        edit: |l| {
+            l.scene.options.contact = ContactApproach::ThreeVertices;
+            l.scene.friction.mode = FrictionMode::Viscous;
+        },
+    },
+    Reading {
+        name: "wind as an acceleration, 4.9 per particle (A-4)",
+        edit: |l| l.scene.options.external_force_is_acceleration = true,
+    },
+    Reading { name: "Δt halved (0.0005)", edit: |l| l.scene.dt_s *= 0.5 },
+    Reading {
+        name: "all three vertices, Δt halved",
+        edit: |l| {
+            l.scene.options.contact = ContactApproach::ThreeVertices;
+            l.scene.dt_s *= 0.5;
+        },
+    },
+    Reading {
+        name: "no self-collision (the spec's numbers)",
+        edit: |l| l.scene.options.self_collision = SelfCollisionMode::Off,
+    },
+    Reading {
+        name: "anima's modern response (not the thesis)",
+        edit: |l| l.scene.options.self_collision = SelfCollisionMode::Modern,
+    },
+];
+
+/// What one E-5 reading does to the sail.
+#[derive(Debug, Clone)]
+pub struct E5Row {
+    pub reading: Reading,
+    /// Largest particle speed over frames 3–20.
+    pub peak_speed: f64,
+    /// Largest particle speed at frame 20 (t = 4 s).
+    pub last_speed: f64,
+    /// The last frame up to which the free corner is furthest downwind at every frame from 3.
+    pub leads_through: usize,
+    /// z extent at frames 12 (before any contact; the spec's ≈ 46), 16 (its largest) and 20.
+    pub extent_12: f64,
+    pub extent_16: f64,
+    pub extent_20: f64,
+    /// Self-collision responses of the thesis's kind over the run.
+    pub responses: u64,
+    /// Largest particle distance at frame 20 from the run without self-collisions (how far contact
+    /// moved the sail from the shape the wind alone gives it).
+    pub distance_from_free: f64,
+}
+
+impl E5Row {
+    /// The sail keeps its shape: the free corner leads at every frame the thesis shows (3–19) and no
+    /// particle moves faster than 1.5 times the fastest of the run without self-collisions.
+    pub fn keeps_shape(&self, free_peak_speed: f64) -> bool {
+        self.leads_through >= 19 && self.peak_speed <= 1.5 * free_peak_speed
+    }
+}
+
+/// Runs E-5 under each reading of [`E5_READINGS`].
+pub fn e5_search() -> Result<Vec<E5Row>> {
+    let free = e5_wind_scene(|l| l.scene.options.self_collision = SelfCollisionMode::Off)?;
+    E5_READINGS
+        .iter()
+        .map(|&reading| {
+            let w = e5_wind_scene(reading.edit)?;
+            let distance_from_free = w
+                .positions_last
+                .iter()
+                .zip(&free.positions_last)
+                .map(|(a, b)| a.distance(*b))
+                .fold(0.0, f64::max);
+            Ok(E5Row {
+                reading,
+                peak_speed: w.max_speed[2..].iter().copied().fold(0.0, f64::max),
+                last_speed: w.max_speed_last,
+                leads_through: 2 + w.free_corner_furthest.iter().skip(2).take_while(|&&b| b).count(),
+                extent_12: w.z_extent[11],
+                extent_16: w.z_extent[15],
+                extent_20: w.z_extent[19],
+                responses: w.surface_hits.last().copied().unwrap_or(0),
+                distance_from_free,
+            })
+        })
+        .collect()
+}
+
+/// The readings searched for E-6: friction (A-2, S3.7), the translation's timing and the step.
+/// No collision fires in E-6 and the curtains have no bending springs, so the contact readings and
+/// the bend reaction cannot change it.
+pub const E6_READINGS: [Reading; 5] = [
+    Reading { name: "faithful (spec defaults)", edit: |_| {} },
+    Reading {
+        name: "friction viscous −μv (A-2)", edit: |l| l.scene.friction.mode = FrictionMode::Viscous
+    },
+    Reading { name: "friction clamp (S3.7 [EXT])", edit: |l| l.scene.options.friction_clamp = true },
+    Reading {
+        name: "translation as a jump per frame (A-6)",
+        edit: |l| l.scene.options.translation = TranslationMode::PerFrameJump,
+    },
+    Reading { name: "Δt halved (0.0005)", edit: |l| l.scene.dt_s *= 0.5 },
+];
+
+/// What one E-6 reading leaves at the end, and how E-3's curtain compares.
+#[derive(Debug, Clone)]
+pub struct E6Row {
+    pub reading: Reading,
+    /// Largest particle speed at frames 78 (the rails stop), 100 (end of the pause), 140 (the rails
+    /// stop again) and 145 (the last).
+    pub speed_78: f64,
+    pub speed_100: f64,
+    pub speed_140: f64,
+    pub speed_145: f64,
+    /// Kinetic energy of both curtains at frame 145.
+    pub energy_145: f64,
+    /// Largest particle distance at frame 145 from the frame-25 hanging state.
+    pub distance_145: f64,
+    /// Largest particle speed of the E-3 curtain 5 s after release (frame 5), the time E-6 leaves
+    /// between the rails' stop and its last frame.
+    pub e3_speed_5: f64,
+    /// The whole run.
+    pub theatre: E6Theatre,
+}
+
+/// Rest as E-3 measures it (spec E-3: max speed below 0.01).
+pub const AT_REST_SPEED: f64 = 0.01;
+
+impl E6Row {
+    /// Seconds the curtains would need after the rails stop at frame 140 to fall below
+    /// [`AT_REST_SPEED`] if they decayed as fast as they do in the 22 s pause (frames 78–100).
+    pub fn rest_time_after_140(&self) -> f64 {
+        pause_rest_time(self.speed_78, self.speed_100, self.speed_140)
+    }
+}
+
+/// The time to fall from `from` to [`AT_REST_SPEED`] at the exponential decay from `start` to `end`
+/// over the 22 s pause.
+pub fn pause_rest_time(start: f64, end: f64, from: f64) -> f64 {
+    let rate = (end / start).ln() / 22.0;
+    (AT_REST_SPEED / from).ln() / rate
+}
+
+/// Runs E-6 under each reading of [`E6_READINGS`].
+pub fn e6_search() -> Result<Vec<E6Row>> {
+    E6_READINGS.iter().map(|&reading| e6_row(reading)).collect()
+}
+
+/// E-6 under one reading.
+pub fn e6_row(reading: Reading) -> Result<E6Row> {
+    let t = e6_theatre_with(reading.edit)?;
+    let (loaded, mut curtain) = ThesisScene::Curtain.world(reading.edit)?;
+    run_to_frame(&loaded, &mut curtain, 5)?;
+    Ok(E6Row {
+        reading,
+        speed_78: t.max_speed[77],
+        speed_100: t.max_speed[99],
+        speed_140: t.max_speed[139],
+        speed_145: t.max_speed[144],
+        energy_145: t.kinetic_energy[144],
+        distance_145: t.distance_from_hanging,
+        e3_speed_5: curtain.diagnostics().max_speed,
+        theatre: t,
     })
 }
 
