@@ -423,6 +423,7 @@ impl RunArgs {
                 ExportArg::Usd => Export::Usd,
             }),
             parallel: !self.one_thread,
+            live: None,
         })
     }
 }

@@ -14,6 +14,8 @@
 //!   are measured on, and their trackers, which a character scene's run reports;
 //! - [`prelude`]: the types above a user reaches for first, in one import;
 //! - [`interrupt`]: a request from outside (Python's Ctrl-C) that a long computation stop;
+//! - [`live`]: a run watched and steered while it goes (`anima run --live`): frames out, a page's
+//!   pause, step and controller parameters in, through a [`live::LiveLink`] its caller implements;
 //! - [`drape`]: the Oliveira cloth's drape loop; [`output`]: files written whole (a temporary file, then
 //!   a rename); [`picture`]: the pictures a run writes.
 //!
@@ -39,6 +41,7 @@
 
 pub mod drape;
 pub mod interrupt;
+pub mod live;
 pub mod objectives;
 pub mod optimise;
 pub mod output;

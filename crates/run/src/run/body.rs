@@ -18,6 +18,7 @@ use serde::Serialize;
 use super::export::GltfExport;
 use super::series::FrameSeries;
 use super::{Detail, OutputClock, Progress, RunOptions, Summary};
+use crate::live::{LiveRun, ParamChange};
 use crate::objectives::{self, FlipOutcome, ThrowOutcome, WalkOutcome};
 use crate::output::write_atomic;
 
@@ -84,6 +85,10 @@ pub struct BodyDetail {
     pub models: Vec<ModelSummary>,
     /// A character scene's evaluation, when it asks for one.
     pub evaluation: Option<EvaluationOutcome>,
+    /// Controller parameters a live page changed during the run (`anima run --live`), in order; left
+    /// out of the summary when none was.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub parameter_changes: Vec<ParamChange>,
 }
 
 /// What a character scene's evaluation measured.
@@ -101,6 +106,11 @@ pub(crate) trait Figures {
     fn sensors(&self) -> &[Sensors];
     /// One control step, the sensors read afterwards.
     fn step(&mut self) -> Result<(), BodyError>;
+    /// The controller driving the figures, whose parameters a live page may set; `None` for figures
+    /// holding poses.
+    fn controller_mut(&mut self) -> Option<&mut anima_control::Controller> {
+        None
+    }
 }
 
 pub(crate) struct Posed {
@@ -158,6 +168,9 @@ impl Figures for Character {
     }
     fn step(&mut self) -> Result<(), BodyError> {
         Character::step(self)
+    }
+    fn controller_mut(&mut self) -> Option<&mut anima_control::Controller> {
+        Some(&mut self.controller)
     }
 }
 
@@ -339,6 +352,12 @@ fn run_figures<F: Figures>(
         }
         None => None,
     };
+    // A live page sees the start, then the export's frames; its commands are taken before each step.
+    let mut live = opts.live.as_ref().map(LiveRun::new);
+    let mut live_poses = Vec::new();
+    if let Some(l) = &mut live {
+        l.figure_frame(0, world, &mut live_poses)?;
+    }
     let mut all_finite = true;
     let mut error = None;
     let mut pictures = OutputClock::default();
@@ -346,6 +365,10 @@ fn run_figures<F: Figures>(
     let started = Instant::now();
     let mut steps = 0;
     for k in 1..=n_steps {
+        if let Some(l) = &mut live {
+            let t = figures.world().time();
+            l.commands(figures.controller_mut(), k, t)?;
+        }
         if let Err(e) = figures.step() {
             all_finite = false;
             error = Some(e.to_string());
@@ -372,6 +395,11 @@ fn run_figures<F: Figures>(
             && k % frame_every == 0
         {
             f.push(figures.world().time(), &frame_values(figures.sensors(), &hips));
+        }
+        if let Some(l) = &mut live
+            && k % frame_every == 0
+        {
+            l.figure_frame((k / frame_every) as usize, figures.world(), &mut live_poses)?;
         }
         if k % (n_steps / 100).max(1) == 0 {
             progress.advance(k);
@@ -417,6 +445,7 @@ fn run_figures<F: Figures>(
             steps_per_second: steps as f64 / sim_seconds,
             models: stats,
             evaluation: None,
+            parameter_changes: live.map(|l| l.changes).unwrap_or_default(),
         }),
     })
 }

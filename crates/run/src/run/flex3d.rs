@@ -142,6 +142,8 @@ pub fn run(
     // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
     let triangles = world.all_triangles();
     let mut watch = CrossingWatch::default();
+    // A live page sees each frame and may pause the run between frames.
+    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
     let mut output = OutputClock::default();
     // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
     // before the clock starts, and not in the summary's largest.
@@ -177,6 +179,9 @@ pub fn run(
             }
             Ok(())
         })?;
+        if let Some(l) = &mut live {
+            l.cloth_frame(k, world.time(), world.positions(), &triangles)?;
+        }
         let crossings = watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
         if let Some(f) = &mut series {

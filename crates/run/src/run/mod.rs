@@ -49,6 +49,9 @@ pub struct RunOptions {
     /// at least [`PARALLEL_MIN_PARTICLES`] particles, or [`PARALLEL_MIN_PARTICLES_FUSED`] for symplectic
     /// Euler. The results are the same to the bit as on one thread.
     pub parallel: bool,
+    /// A page watching the run (`anima run --live`): frames as they are computed, and its commands
+    /// taken at each control step of a figure run and at each frame of a cloth run ([`crate::live`]).
+    pub live: Option<crate::live::Live>,
 }
 
 /// Sheets smaller than this run on one thread even when [`RunOptions::parallel`] is set, unless stepped

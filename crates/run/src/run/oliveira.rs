@@ -86,6 +86,8 @@ pub fn run(
     let mut kept: Vec<Kept> = Vec::new();
     let mut write_error = None;
     let mut watch = CrossingWatch::default();
+    // A live page sees each frame and may pause the run between frames.
+    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
     let mut output = OutputClock::default();
     // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
     // before the clock starts, and not in the summary's largest.
@@ -132,6 +134,17 @@ pub fn run(
             });
             if let Err(e) = written {
                 write_error = Some(e);
+                return ControlFlow::Break(());
+            }
+            if let Some(l) = &mut live
+                && let Err(e) = l.cloth_frame(
+                    next_frame,
+                    frame_time(next_frame),
+                    c.cloth().positions(),
+                    c.cloth().triangles(),
+                )
+            {
+                write_error = Some(e.into());
                 return ControlFlow::Break(());
             }
             let crossings = watch.look(c.cloth().positions(), c.cloth().triangles());

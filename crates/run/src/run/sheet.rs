@@ -130,6 +130,8 @@ pub fn run(
     let mut error = None;
     let mut diverged = false;
     let mut watch = CrossingWatch::default();
+    // A live page sees each frame and may pause the run between frames.
+    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
     let mut output = OutputClock::default();
     let mut frames = 0;
     // What the adaptive methods did (the model's own clock counts fixed steps only).
@@ -188,6 +190,9 @@ pub fn run(
                 let frame = Frame { k, t, x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
+            if let Some(l) = &mut live {
+                l.cloth_frame(k, t, sim.positions(), &triangles)?;
+            }
             if taken > budget && k < n_frames {
                 error = Some(format!(
                     "stopped at t = {t} s after {taken} adaptive steps, {ADAPTIVE_STEP_BUDGET} times the {n_steps} steps \
@@ -229,6 +234,9 @@ pub fn run(
                 let frame = Frame { k, t: sim.time(), x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
+            if let Some(l) = &mut live {
+                l.cloth_frame(k, sim.time(), sim.positions(), &triangles)?;
+            }
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
