@@ -20,6 +20,9 @@ macro_rules! embed {
 pub(crate) const EMBEDDED: &[Embedded] = &[
     embed!("/", "text/html; charset=utf-8", "index.html"),
     embed!("/viewer.js", JS, "viewer.js"),
+    // A live run's page (`anima run --live`), served at `/` in place of the player while the run goes.
+    embed!("/live.html", "text/html; charset=utf-8", "live.html"),
+    embed!("/live.js", JS, "live.js"),
     embed!("/three/three.module.js", JS, "three/three.module.js"),
     embed!("/three/three.core.js", JS, "three/three.core.js"),
     embed!("/three/addons/loaders/GLTFLoader.js", JS, "three/addons/loaders/GLTFLoader.js"),

@@ -113,20 +113,24 @@ pub struct Frame {
 
 /// The run's end of the frame channel. See the module docs for why it drops rather than waits.
 /// (tokio's channel: the run offers from its own thread without a runtime, the server awaits.)
+/// Beside the frames it carries the run's notes (text for the page: what to draw, progress,
+/// warnings, a parameter change taken), bounded to [`COMMAND_QUEUE`] and dropped likewise.
 #[derive(Debug)]
 pub struct FrameSender {
     tx: tokio::sync::mpsc::Sender<Frame>,
+    notes: tokio::sync::mpsc::Sender<String>,
     dropped: usize,
 }
 
-/// The server's end of the frame channel.
+/// The server's end of the frame channel: the frames, and the run's notes.
 #[derive(Debug)]
-pub struct FrameReceiver(pub tokio::sync::mpsc::Receiver<Frame>);
+pub struct FrameReceiver(pub tokio::sync::mpsc::Receiver<Frame>, pub tokio::sync::mpsc::Receiver<String>);
 
-/// A bounded frame channel of [`FRAME_QUEUE`] frames.
+/// A bounded frame channel of [`FRAME_QUEUE`] frames (and [`COMMAND_QUEUE`] notes).
 pub fn frame_channel() -> (FrameSender, FrameReceiver) {
     let (tx, rx) = tokio::sync::mpsc::channel(FRAME_QUEUE);
-    (FrameSender { tx, dropped: 0 }, FrameReceiver(rx))
+    let (notes, notes_rx) = tokio::sync::mpsc::channel(COMMAND_QUEUE);
+    (FrameSender { tx, notes, dropped: 0 }, FrameReceiver(rx, notes_rx))
 }
 
 impl Frame {
@@ -163,6 +167,11 @@ impl FrameSender {
         let queued = self.tx.try_send(frame).is_ok();
         self.dropped += usize::from(!queued);
         queued
+    }
+
+    /// Hands a note (one text message) to the page if there is room, else drops it; never blocks.
+    pub fn tell(&mut self, text: String) -> bool {
+        self.notes.try_send(text).is_ok()
     }
 
     /// Frames dropped so far because the page was slow or gone.
@@ -202,6 +211,12 @@ impl CommandReceiver {
     /// The commands that arrived since the last call, oldest first; never blocks the run.
     pub fn drain(&self) -> impl Iterator<Item = Command> + '_ {
         self.0.try_iter()
+    }
+
+    /// The next command, waiting up to `wait` for one (a paused run waits; `None` when none came or
+    /// the server has gone).
+    pub fn wait(&self, wait: std::time::Duration) -> Option<Command> {
+        self.0.recv_timeout(wait).ok()
     }
 }
 

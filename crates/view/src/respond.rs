@@ -29,6 +29,8 @@ pub(crate) async fn respond<B>(site: &Site, request: &Request<B>) -> Response<Bo
     if path.len() > MAX_PATH_BYTES {
         return error(StatusCode::URI_TOO_LONG, "path too long");
     }
+    // A live run's page is its `/`: the player needs the animation the run writes only at its end.
+    let path = if site.live.is_some() && path == "/" { "/live.html" } else { path };
     if let Some(e) = EMBEDDED.iter().find(|e| e.path == path || (e.path == "/" && path == "/index.html")) {
         return ok(e.media_type, Bytes::from_static(e.bytes));
     }

@@ -121,6 +121,12 @@ where
                     return;
                 }
             }
+            note = frames.1.recv() => {
+                let Some(note) = note else { return };
+                if ws.send(Message::text(note)).await.is_err() {
+                    return;
+                }
+            }
             frame = frames.0.recv() => {
                 let Some(frame) = frame else { return };
                 if ws.send(Message::binary(frame.to_bytes())).await.is_err() {

@@ -172,6 +172,11 @@ fn live_socket_streams_frames_and_passes_checked_commands() {
     assert_eq!(u32::from_le_bytes(bytes[0..4].try_into().unwrap()), 7);
     assert_eq!(f32::from_le_bytes(bytes[20..24].try_into().unwrap()), 3.0);
 
+    // A note from the run arrives as a text message.
+    assert!(live.frames.tell("{\"set\":1}".to_owned()));
+    let (opcode, note) = receive(&mut s).unwrap();
+    assert_eq!((opcode, note.as_slice()), (1, b"{\"set\":1}".as_slice()));
+
     // A second page while this one watches: refused.
     assert_eq!(open(live.addr, "Sec-WebSocket-Version: 13\r\n").unwrap_err(), 409);
     drop(s);
