@@ -1,5 +1,6 @@
 //! `anima`: run any scene, optimise a controller, convert a FLEX3D script.
 
+mod live;
 mod progress;
 
 use std::io::Write as _;
@@ -295,6 +296,18 @@ struct RunArgs {
     /// other explicit methods; the results are the same to the bit.
     #[arg(long)]
     one_thread: bool,
+    /// Watch and steer the run in the browser while it goes: serves, on 127.0.0.1 only, a page with
+    /// the frames as they are computed, the progress and warnings, pause, resume and step one frame,
+    /// and for a character a slider per controller parameter (applied at the next control step). The
+    /// address is printed; the outputs are written at the end as without it, and the server stops.
+    #[arg(long)]
+    live: bool,
+    /// The port of `--live` on 127.0.0.1 (0: any free port).
+    #[arg(long, default_value_t = 8410, requires = "live")]
+    port: u16,
+    /// With `--live`: start paused after the first frame, until the page says resume or step.
+    #[arg(long, requires = "live")]
+    paused: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -477,7 +490,11 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         eprintln!("anima: {label} — {}", describe(&scene));
     }
     let mut bar = Bar::new(!args.quiet);
-    let summary = anima_run::run::run(&scene, &label, &opts, &mut bar)?;
+    let summary = if args.live {
+        run_live(&scene, &label, opts, bar, &args)?
+    } else {
+        anima_run::run::run(&scene, &label, &opts, &mut bar)?
+    };
     write_summary(&summary_path, &summary)?;
     if !args.quiet {
         report(&summary);
@@ -501,6 +518,45 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         return Ok(ExitCode::from(2));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A run with its live page: the server on its own thread for the run's length. The page is told
+/// when the run has ended; the server then stops (`anima view OUT` plays the finished run).
+fn run_live(scene: &Scene, label: &str, mut opts: RunOptions, bar: Bar, args: &RunArgs) -> Result<Summary> {
+    let params = match scene {
+        Scene::Character(c) => anima_run::live::parameters(&c.controller),
+        _ => Vec::new(),
+    };
+    let (frames, frames_rx) = anima_view::live::frame_channel();
+    let (commands_tx, commands) = anima_view::live::command_channel();
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let view =
+        anima_view::Live { params: live::view_params(&params), frames: frames_rx, commands: commands_tx };
+    let server = anima_view::Server::bind_live(&args.out, args.port, view)?;
+    let stopper = server.stopper();
+    println!("anima run --live: http://{}/ (the page follows the run; Ctrl-C ends it)", server.local_addr());
+    std::io::stdout().flush()?;
+    let serving = std::thread::spawn(move || server.run());
+    let mut link = anima_run::live::Live::new(live::ViewLink { frames, commands }, params);
+    if args.paused {
+        link = link.start_paused();
+    }
+    opts.live = Some(link.clone());
+    let mut progress = live::LiveBar::new(bar, link.clone());
+    let summary = anima_run::run::run(scene, label, &opts, &mut progress);
+    let end = match &summary {
+        Ok(s) => s.error.clone().unwrap_or_else(|| format!("{} steps, {} frames", s.steps, s.frames)),
+        Err(e) => format!("{e:#}"),
+    };
+    link.link().tell(anima_run::live::done_note(&end));
+    // Time for the last frames and the note to reach the page before the server closes its socket.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    stopper.stop();
+    serving
+        .join()
+        .map_err(|_| anyhow::anyhow!("the live server panicked"))?
+        .context("serving the live page")?;
+    summary
 }
 
 /// One line on what is about to run.

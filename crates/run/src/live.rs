@@ -83,6 +83,7 @@ pub struct ParamChange {
 pub struct Live {
     link: Arc<Mutex<dyn LiveLink>>,
     params: Arc<[LiveParam]>,
+    paused: bool,
 }
 
 impl std::fmt::Debug for Live {
@@ -94,7 +95,13 @@ impl std::fmt::Debug for Live {
 impl Live {
     /// `link` with the parameters the page offers (from [`parameters`]; none for cloth).
     pub fn new(link: impl LiveLink + 'static, params: Vec<LiveParam>) -> Self {
-        Self { link: Arc::new(Mutex::new(link)), params: params.into() }
+        Self { link: Arc::new(Mutex::new(link)), params: params.into(), paused: false }
+    }
+
+    /// The run starts paused, after its first frame, until the page says `resume` or `step`: a
+    /// watcher opens the page before anything moves.
+    pub fn start_paused(self) -> Self {
+        Self { paused: true, ..self }
     }
 
     pub fn params(&self) -> &[LiveParam] {
@@ -155,6 +162,11 @@ pub fn slider_range(info: &ParamInfo, value: f64) -> (f64, f64) {
     }
 }
 
+/// The note that tells the page the run has ended, and how.
+pub fn done_note(how: &str) -> String {
+    serde_json::json!({ "done": how }).to_string()
+}
+
 /// A run loop's live state: paused or not, a frame to stop after, what the page was last sent.
 pub(crate) struct LiveRun {
     live: Live,
@@ -174,7 +186,7 @@ impl LiveRun {
     pub(crate) fn new(live: &Live) -> Self {
         Self {
             live: live.clone(),
-            paused: false,
+            paused: live.paused,
             stepping: false,
             triangles: Vec::new(),
             mesh_sent: false,
