@@ -558,25 +558,12 @@ impl<C: Coord> RigidAggregation<C> {
         }
         self.n_agg = count as usize;
         // Members of each aggregate in increasing order, for the restriction's per-aggregate sums.
-        self.member_start.clear();
-        self.member_start.resize(self.n_agg + 1, 0);
-        for &g in &self.agg {
-            if g != NONE {
-                self.member_start[g as usize + 1] += 1;
-            }
-        }
-        for g in 0..self.n_agg {
-            self.member_start[g + 1] += self.member_start[g];
-        }
-        let mut fill: Vec<u32> = self.member_start[..self.n_agg].to_vec();
-        self.members.clear();
-        self.members.resize(self.member_start[self.n_agg] as usize, 0);
-        for (i, &g) in self.agg.iter().enumerate() {
-            if g != NONE {
-                self.members[fill[g as usize] as usize] = i as u32;
-                fill[g as usize] += 1;
-            }
-        }
+        group(
+            self.n_agg,
+            self.agg.iter().enumerate().map(|(i, &g)| (g, i)),
+            &mut self.members,
+            &mut self.member_start,
+        );
         // Coarse pairs in order of first appearance.
         let mut index = std::collections::HashMap::new();
         let mut pairs: Vec<(u32, u32)> = Vec::new();
@@ -885,7 +872,10 @@ impl<C: Coord> RigidAggregation<C> {
         let per = self.per;
         // A one- or two-particle aggregate has rotations that move nothing (a zero row): a relative
         // 10⁻¹⁰ on the diagonal keeps the factorisation positive definite and leaves such modes inert.
+        // When every coordinate is held (all pinned or sticking) the coarse matrix is zero: its identity
+        // then serves, since the filtered residuals it is given are zero too.
         let scale = self.d_blocks.iter().flat_map(|d| (0..per).map(move |p| d[p][p])).fold(0.0, f64::max);
+        let scale = if scale > 0.0 { scale } else { 1e10 };
         let mut e = 0;
         for (g, d) in self.d_blocks.iter().enumerate() {
             for p in 0..per {
