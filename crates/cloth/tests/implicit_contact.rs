@@ -242,3 +242,35 @@ fn contact_in_the_solve_is_deterministic() {
     };
     assert_eq!(run(), run());
 }
+
+/// Smoothed friction (`options.friction_smoothing_m_s`): a 17² cloth dropped on a ball on a floor at
+/// 1/60 s drapes without a particle inside either and comes to rest; a speed that is not positive is
+/// refused, named.
+#[test]
+fn smoothed_friction_drapes_a_ball_and_refuses_a_bad_speed() {
+    let build = |eps: f64| {
+        OliveiraCloth::builder(17, 0.6)
+            .sphere("ball", DVec3::new(0.0, 0.0, 0.15), 0.15)
+            .floor(0.0)
+            .smoothed_friction(eps)
+            .build()
+    };
+    for eps in [0.0, -1e-3, f64::NAN] {
+        let err = build(eps).expect_err("a speed that is not positive").to_string();
+        assert!(err.contains("options.friction_smoothing_m_s"), "{err}");
+    }
+    let mut cloth = build(1e-3).unwrap();
+    let (mut peak, mut last_second) = (0.0f64, 0.0f64);
+    for step in 0..300 {
+        cloth.step().unwrap();
+        assert!(cloth.penetrations().is_empty(), "step {step}: particles inside {:?}", cloth.penetrations());
+        let kinetic = cloth.kinetic_energy();
+        peak = peak.max(kinetic);
+        if step >= 240 {
+            last_second = last_second.max(kinetic);
+        }
+    }
+    // It comes to rest over the ball: in its fifth second the kinetic energy stays below a thousandth of
+    // its peak (measured: 1.0·10⁻⁵ J against 4.9·10⁻² J; the active set's, 2.9·10⁻⁶ J).
+    assert!(last_second < 1e-3 * peak, "kinetic energy {last_second} J in the fifth second, peak {peak} J");
+}

@@ -196,6 +196,7 @@ impl<C: Coord> Stepper<C> {
             to.newton_iterations = from.newton_iterations;
             to.newton_contraction = from.newton_contraction;
             to.regime_iterations = from.regime_iterations;
+            to.contact.friction_model = from.contact.friction_model;
             if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
                 b.params = a.params;
             }
@@ -283,6 +284,19 @@ impl<C: Coord> Stepper<C> {
         if let Some(ws) = &mut self.implicit {
             ws.regime_iterations = iterations;
         }
+    }
+
+    /// How friction enters the contacts of generalised-α's solve: [`crate::contact::Friction::ActiveSet`]
+    /// (the default) or smoothed. No effect on other integrators or without contacts.
+    pub fn set_friction(&mut self, friction: crate::contact::Friction) {
+        if let Some(ws) = &mut self.implicit {
+            ws.contact.friction_model = friction;
+        }
+    }
+
+    /// The friction model of the contacts in the solve (`None` for explicit integrators).
+    pub fn friction(&self) -> Option<crate::contact::Friction> {
+        self.implicit.as_ref().map(|w| w.contact.friction_model)
     }
 
     /// Generalised-α's iterations for contacts that change regime (`None` for explicit integrators).

@@ -71,6 +71,13 @@ impl ClothBuilder {
         self
     }
 
+    /// Friction smoothed below the sliding speed `speed_m_s` instead of Coulomb's stick and slide regimes
+    /// ([`super::Options::friction_smoothing_m_s`]).
+    pub fn smoothed_friction(mut self, speed_m_s: f64) -> Self {
+        self.scene.options.friction_smoothing_m_s = Some(speed_m_s);
+        self
+    }
+
     pub fn gravity(mut self, g: DVec3) -> Self {
         self.scene.gravity_m_s2 = g;
         self

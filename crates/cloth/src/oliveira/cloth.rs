@@ -251,6 +251,14 @@ impl OliveiraCloth {
                 format!("must be a positive, finite strain, got {tau}"),
             ));
         }
+        if let Some(eps) = scene.options.friction_smoothing_m_s
+            && !(eps.is_finite() && eps > 0.0)
+        {
+            return Err(field(
+                "options.friction_smoothing_m_s",
+                format!("must be a positive, finite speed, got {eps}"),
+            ));
+        }
         if let Some(name) = scene.material.invalid_field() {
             return Err(field("material", format!("field `{name}` is out of range")));
         }
@@ -365,7 +373,13 @@ impl OliveiraCloth {
         Ok(Self {
             bounds,
             gravity: scene.gravity_m_s2,
-            stepper: Stepper::new(scene.integrator, n_vertices),
+            stepper: {
+                let mut stepper = Stepper::new(scene.integrator, n_vertices);
+                if let Some(speed_m_s) = scene.options.friction_smoothing_m_s {
+                    stepper.set_friction(anima_ode::contact::Friction::Smoothed { speed_m_s });
+                }
+                stepper
+            },
             now: State::new(x, vec![DVec3::ZERO; n_vertices]),
             next: State::zeros(n_vertices),
             clearance: vec![0.0; n_vertices],

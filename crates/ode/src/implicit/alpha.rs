@@ -48,7 +48,7 @@ use crate::Coord;
 use crate::stepper::{OdeError, State, StepStats};
 
 use super::Linearized;
-use super::contact::{ContactModel, Regime, StepStart};
+use super::contact::{ContactModel, Friction, Regime, StepStart};
 use super::system::Filter;
 use super::workspace::ImplicitWorkspace;
 
@@ -272,7 +272,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
         if !self.b.iter().all(|b| b.is_finite()) {
             return Err(OdeError::NonFiniteSystem);
         }
-        let mut merit = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
+        let mut merit = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta, &next.v);
         let mut iterations = 0;
         let mut evaluations = 1;
         let (mut newton, mut extra) = (0, 0);
@@ -301,9 +301,20 @@ impl<C: Coord> ImplicitWorkspace<C> {
                     &self.b,
                     c.eta,
                 );
+                // Smoothed friction is known only once a contact's normal reaction is: the merit that
+                // decides whether Newton goes on must hold it (a contact arriving on a floor has none in
+                // its first solve, and without this its step would end without friction).
+                if matches!(self.contact.friction_model, Friction::Smoothed { .. }) {
+                    merit = self.merit(lin.masses(), lin.prescribed(), true, c.eta, &next.v);
+                }
                 for s in &self.contact.slots {
                     let i = s.contact.coordinate as usize;
                     self.b[i] += s.friction * c.eta;
+                    // Smoothed friction is linear in w with its lagged coefficient: −η ∂F/∂w = η d (I − n nᵀ),
+                    // and the filter removes the normal part.
+                    if s.damping > 0.0 {
+                        self.a.add_diagonal(i, s.damping * c.eta);
+                    }
                 }
                 if let (Some(p), Some(s)) = (&mut self.profile, started) {
                     p.contact_s += s.elapsed().as_secs_f64();
@@ -392,7 +403,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
                 }
                 self.evaluate(lin, &c, t, now, next, with_matrix);
                 evaluations += 1;
-                let trial = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta);
+                let trial = self.merit(lin.masses(), lin.prescribed(), contacts.is_some(), c.eta, &next.v);
                 let finite = self.b.iter().all(|b| b.is_finite());
                 if !finite && attempt == halvings {
                     return Err(OdeError::NonFiniteSystem);
@@ -547,7 +558,8 @@ impl<C: Coord> ImplicitWorkspace<C> {
 
     /// ‖S b‖ in the M⁻¹ norm, with the kinetic friction of sliding contacts: the residual the solve
     /// can act on (constrained directions carry the contacts' reactions instead).
-    fn merit(&self, masses: &[f64], prescribed: &[bool], with_contacts: bool, eta: f64) -> f64 {
+    /// Smoothed friction is evaluated at the iterate `w` with its lagged coefficient, as the solve saw it.
+    fn merit(&self, masses: &[f64], prescribed: &[bool], with_contacts: bool, eta: f64, w: &[C]) -> f64 {
         let mut sum = 0.0;
         for i in 0..masses.len() {
             if prescribed[i] {
@@ -556,7 +568,13 @@ impl<C: Coord> ImplicitWorkspace<C> {
             let mut r = self.b[i];
             if with_contacts && self.contact.slot_of[i] != 0 {
                 let s = &self.contact.slots[self.contact.slot_of[i] as usize - 1];
-                r = C::block_mul(self.contact.filter[i], r + s.friction * eta);
+                let friction = if s.damping > 0.0 {
+                    let n = s.contact.normal;
+                    (w[i] - n * n.dot(w[i])) * -s.damping
+                } else {
+                    s.friction
+                };
+                r = C::block_mul(self.contact.filter[i], r + friction * eta);
             }
             sum += r.dot(r) / masses[i];
         }

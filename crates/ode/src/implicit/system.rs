@@ -86,6 +86,15 @@ impl<C: Coord> SystemMatrix<C> {
         }
     }
 
+    /// Adds `d` I to coordinate i's diagonal block (a contact's friction as damping, already times η).
+    pub fn add_diagonal(&mut self, i: usize, d: f64) {
+        self.diag[i] = C::block_combine(self.diag[i], 1.0, C::block_identity(d), 1.0);
+        self.jacobi[i] = C::block_inverse(self.diag[i]);
+        if self.spring_form {
+            self.masses[i] += d;
+        }
+    }
+
     /// Makes the block-Jacobi inverses those of the filtered system S A S for every coordinate whose
     /// projector S_i is neither the identity nor zero (a contact constrains one direction of it):
     /// J_i = S_i (S_i A_ii S_i + t (I − S_i))⁻¹ S_i, the inverse of A_ii on the free directions (t sets
