@@ -1,7 +1,11 @@
 //! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny),
 //! `V` = 65 | 129 | 257 (65), `T` = simulated seconds (3; a 3 s run of a size whose converged references
 //! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1),
-//! `REGIME` (Newton iterations for contacts that change regime; the stepper's default).
+//! `REGIME` (Newton iterations for contacts that change regime; the stepper's default), `REFERENCES=1`
+//! (compute the size's converged references first when they are not cached: minutes),
+//! `FRICTION_SMOOTHING` (ε in m/s for smoothed friction, `none` for the stick and slide regimes, instead
+//! of the scene file's; `cargo xtask bench --scale` honours it too, and caches each model's references
+//! apart).
 
 use anima_lab::repo::Repo;
 
@@ -13,8 +17,10 @@ fn main() -> anyhow::Result<()> {
     let gravity: f64 = var("GRAVITY").and_then(|s| s.parse().ok()).unwrap_or(1.0);
     let regime: Option<usize> = var("REGIME").and_then(|s| s.parse().ok());
     let threads: usize = var("THREADS").and_then(|s| s.parse().ok()).unwrap_or(0);
+    let references = var("REFERENCES").is_some_and(|s| s == "1");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let report = pool.install(|| anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime))?;
+    let report = pool
+        .install(|| anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime, references))?;
     println!("{report}");
     Ok(())
 }

@@ -18,6 +18,7 @@ use anima_cloth::oliveira::OliveiraCloth;
 use anima_cloth::spring_net::SheetSpec;
 use anima_geom::{Aabb, DVec3, count_self_intersections};
 use anima_ode::{Integrator, SolveProfile};
+use anima_scene::oliveira::LoadedOliveira;
 use anima_viz::{Camera, LinePlot, RenderMesh, RenderSettings, Series, SeriesStyle, render};
 use anyhow::{Context, Result, bail};
 
@@ -163,21 +164,39 @@ struct DrapeRun {
 /// study for an hour.
 const BUDGET_257_S: f64 = 480.0;
 
-/// The drape scene `assets/scenes/drape-{obstacle}-{v}.ron`, with gravity scaled by `gravity` and the
-/// step `dt`.
-fn drape_cloth(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> Result<OliveiraCloth> {
+/// The drape scene `assets/scenes/drape-{obstacle}-{v}.ron`, with gravity scaled by `gravity`, the
+/// step `dt` and the friction model of [`friction_smoothing_override`] when one is set.
+fn drape_scene(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> Result<LoadedOliveira> {
     let path = repo.assets(format!("scenes/drape-{obstacle}-{v}.ron"));
     let scene =
         anima_scene::load(&path, &Default::default()).with_context(|| format!("{}", path.display()))?;
     let anima_scene::Scene::Oliveira(mut loaded) = scene else { bail!("{} is not a drape", path.display()) };
     loaded.scene.gravity_m_s2 *= gravity;
     loaded.scene.time_step = anima_cloth::oliveira::StepRule::Fixed { dt_s: dt };
-    Ok(loaded.build()?)
+    if let Some(eps) = friction_smoothing_override() {
+        loaded.scene.options.friction_smoothing_m_s = eps;
+    }
+    Ok(loaded)
 }
 
-/// Where [`converged`] caches its positions.
+fn drape_cloth(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> Result<OliveiraCloth> {
+    Ok(drape_scene(repo, obstacle, v, gravity, dt)?.build()?)
+}
+
+/// The drapes' friction model for a comparison, overriding their scene files' (`FRICTION_SMOOTHING` in
+/// the environment: a sliding speed ε in m/s for smoothed friction, or `none` for the stick and slide
+/// regimes; `cargo run --release -p anima-lab --example scale_probe` documents it).
+fn friction_smoothing_override() -> Option<Option<f64>> {
+    let value = std::env::var("FRICTION_SMOOTHING").ok()?;
+    Some(value.parse().ok())
+}
+
+/// Where [`converged`] caches its positions: one file per model (the friction too) and gravity.
 fn converged_path(repo: &Repo, obstacle: &str, v: usize, gravity: f64, dt: f64) -> PathBuf {
-    repo.cache(format!("scale/drape-{obstacle}-{v}-dt{:.0}-g{:+.0e}.f64", 1.0 / dt, gravity - 1.0))
+    let smoothing =
+        drape_scene(repo, obstacle, v, 1.0, dt).ok().and_then(|l| l.scene.options.friction_smoothing_m_s);
+    let friction = smoothing.map(|eps| format!("-smooth{eps}")).unwrap_or_default();
+    repo.cache(format!("scale/drape-{obstacle}-{v}-dt{:.0}-g{:+.0e}{friction}.f64", 1.0 / dt, gravity - 1.0))
 }
 
 /// Runs a drape to its 3 s; with `watch`, counts particles inside the obstacles and crossing pairs after
@@ -732,7 +751,8 @@ fn stability_section(sheets: &[usize]) -> Result<String> {
 /// A quick look at one drape for whoever tunes its step (`cargo run --release -p anima-lab --example
 /// scale_probe`): `seconds` of the drape `obstacle` at `v`² (gravity × `gravity`, `regime` Newton
 /// iterations for contacts that change regime when given) on the pool it runs in, with where the time
-/// went and, for a 3 s run of a size whose converged references are cached, its error beside their band.
+/// went and, for a 3 s run of a size whose converged references are cached, its error beside their band
+/// (with `references`, the references are computed first when missing).
 pub fn probe(
     repo: &Repo,
     obstacle: &str,
@@ -740,6 +760,7 @@ pub fn probe(
     seconds: f64,
     gravity: f64,
     regime: Option<usize>,
+    references: bool,
 ) -> Result<String> {
     let wall = Instant::now();
     let mut cloth = drape_cloth(repo, obstacle, v, gravity, DT)?;
@@ -788,6 +809,11 @@ pub fn probe(
         stats.impacts,
         wall.elapsed().as_secs_f64(),
     );
+    if references {
+        for g in [1.0, 1.0 + 1e-9, 1.0 - 1e-9] {
+            converged(repo, obstacle, v, g, 1.0 / 960.0)?;
+        }
+    }
     let cached = |g: f64| read_points(&converged_path(repo, obstacle, v, g, 1.0 / 960.0));
     if (seconds - 3.0).abs() < 1e-9
         && let (Some(reference), Some(up), Some(down)) = (cached(1.0), cached(1.0 + 1e-9), cached(1.0 - 1e-9))
