@@ -11,32 +11,32 @@
 use anima_cloth::flex3d::FrictionMode;
 use anima_lab::repo::Repo;
 
+/// Compares a freshly generated report with the committed file at `path` (`UPDATE_REPORTS=1` writes it
+/// instead); `what` names the report and `command` the command that regenerates it.
+fn assert_fresh(path: &std::path::Path, fresh: &str, what: &str, command: &str) {
+    if std::env::var_os("UPDATE_REPORTS").is_some() {
+        std::fs::write(path, fresh).unwrap();
+    }
+    let committed = std::fs::read_to_string(path).unwrap();
+    assert!(
+        fresh == committed,
+        "{what} is stale: run `{command}` (or `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) \
+         and review the diff"
+    );
+}
+
 #[test]
 fn the_committed_flex3d_results_are_what_reproduce_all_writes() {
     let (doc, failed) = anima_lab::flex3d::report::reproduce("all", FrictionMode::Literal).unwrap();
     assert!(failed.is_empty(), "criteria that do not hold: {failed:?}");
+    let command = "cargo xtask reproduce all";
     let path = Repo::here().docs("reproduction/flex3d-results.md");
-    let fresh = doc.render();
-    if std::env::var_os("UPDATE_REPORTS").is_some() {
-        std::fs::write(&path, &fresh).unwrap();
-    }
-    let committed = std::fs::read_to_string(&path).unwrap();
-    assert!(
-        fresh == committed,
-        "docs/reproduction/flex3d-results.md is stale: run `cargo xtask reproduce all` (or \
-         `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
-    );
+    assert_fresh(&path, &doc.render(), "docs/reproduction/flex3d-results.md", command);
     // The narrative report shows the E-5 and E-6 searches as the same run writes them.
     let path = Repo::here().docs(anima_lab::flex3d::report::NARRATIVE);
     let narrative = std::fs::read_to_string(&path).unwrap();
     let fresh = anima_lab::flex3d::report::narrative_with(&doc, &narrative).unwrap();
-    if std::env::var_os("UPDATE_REPORTS").is_some() {
-        std::fs::write(&path, &fresh).unwrap();
-    }
-    assert!(
-        fresh == narrative,
-        "docs/reproduction/flex3d.md's E-5/E-6 searches are stale: run `cargo xtask reproduce all`"
-    );
+    assert_fresh(&path, &fresh, "docs/reproduction/flex3d.md's E-5/E-6 searches", command);
 }
 
 #[test]
@@ -46,15 +46,8 @@ fn the_committed_faithful_simbicon_section_is_what_its_command_writes() {
     let path = Repo::here().docs(faithful::REPORT);
     let committed = std::fs::read_to_string(&path).unwrap();
     let fresh = faithful::document(&section).merged_into(Some(&committed));
-    if std::env::var_os("UPDATE_REPORTS").is_some() {
-        std::fs::write(&path, &fresh).unwrap();
-    }
-    assert!(
-        fresh == committed,
-        "docs/reproduction/nunes-simbicon.md's faithful section is stale: run `cargo xtask reproduce \
-         nunes-simbicon-faithful` (or `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review \
-         the diff"
-    );
+    let what = "docs/reproduction/nunes-simbicon.md's faithful section";
+    assert_fresh(&path, &fresh, what, "cargo xtask reproduce nunes-simbicon-faithful");
 }
 
 #[test]
@@ -62,15 +55,8 @@ fn the_committed_faithful_walker_scan_is_what_its_command_writes() {
     use anima_lab::nunes::faithful_walk;
     let fresh = faithful_walk::document(&Repo::here()).unwrap();
     let path = Repo::here().docs(faithful_walk::REPORT);
-    if std::env::var_os("UPDATE_REPORTS").is_some() {
-        std::fs::write(&path, &fresh).unwrap();
-    }
-    let committed = std::fs::read_to_string(&path).unwrap();
-    assert!(
-        fresh == committed,
-        "docs/reproduction/nunes-walk-faithful.md is stale: run `cargo xtask reproduce nunes-walk-faithful` \
-         (or `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
-    );
+    let what = "docs/reproduction/nunes-walk-faithful.md";
+    assert_fresh(&path, &fresh, what, "cargo xtask reproduce nunes-walk-faithful");
 }
 
 #[test]
@@ -78,14 +64,11 @@ fn the_committed_robustness_report_is_what_its_command_writes() {
     use anima_lab::nunes::robustness;
     let fresh = robustness::document().unwrap();
     let path = Repo::here().docs(robustness::REPORT);
-    if std::env::var_os("UPDATE_REPORTS").is_some() {
-        std::fs::write(&path, &fresh).unwrap();
-    }
-    let committed = std::fs::read_to_string(&path).unwrap();
-    assert!(
-        fresh == committed,
-        "docs/reproduction/nunes-robustness.md is stale: run `cargo xtask reproduce nunes-robustness` (or \
-         `UPDATE_REPORTS=1 cargo test -p anima-tests --release reports`) and review the diff"
+    assert_fresh(
+        &path,
+        &fresh,
+        "docs/reproduction/nunes-robustness.md",
+        "cargo xtask reproduce nunes-robustness",
     );
 }
 
