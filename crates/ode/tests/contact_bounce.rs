@@ -2,50 +2,11 @@
 //! hits, not at the end of the step.
 
 use anima_ode::contact::{Contact, ContactModel};
-use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, Stepper};
+mod common;
+
+use anima_ode::{Integrator, State, Stepper};
+use common::Particles;
 use glam::DVec3;
-
-/// Free particles: no force at all, so a step's motion is exactly a straight line until it meets the
-/// plane.
-struct Free {
-    masses: Vec<f64>,
-    prescribed: Vec<bool>,
-}
-
-impl Linearized<DVec3> for Free {
-    fn masses(&self) -> &[f64] {
-        &self.masses
-    }
-    fn prescribed(&self) -> &[bool] {
-        &self.prescribed
-    }
-    fn pattern(&self) -> &[(u32, u32)] {
-        &[]
-    }
-    fn force_and_jacobians(
-        &mut self,
-        _t: f64,
-        _x: &[DVec3],
-        _v: &[DVec3],
-        f: &mut [DVec3],
-        _jac: &mut Jacobians<DVec3>,
-    ) {
-        f.fill(DVec3::ZERO);
-    }
-}
-
-impl OdeSystem for Free {
-    type Coord = DVec3;
-    fn n_coords(&self) -> usize {
-        self.masses.len()
-    }
-    fn acceleration(&mut self, _t: f64, _x: &[DVec3], _v: &[DVec3], a: &mut [DVec3]) {
-        a.fill(DVec3::ZERO);
-    }
-    fn linearized(&mut self) -> Option<&mut dyn Linearized<DVec3>> {
-        Some(self)
-    }
-}
 
 /// The plane z = 0, frictionless, with restitution `e`: a particle whose step ends below it, or within
 /// 1 mm above it, is in contact at the point of the plane under its end.
@@ -74,7 +35,7 @@ impl ContactModel<DVec3> for Floor {
 /// hits after 1/30 s, two thirds into the first step.
 fn drop(e: f64, steps: usize) -> State<DVec3> {
     let h = 0.05;
-    let mut sys = Free { masses: vec![0.01], prescribed: vec![false] };
+    let mut sys = Particles { masses: vec![0.01], prescribed: vec![false], gravity: DVec3::ZERO };
     let mut floor = Floor { e };
     let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, 1);
     let mut now = State::new(vec![DVec3::new(0.0, 0.0, 0.1)], vec![DVec3::new(0.2, 0.0, -3.0)]);

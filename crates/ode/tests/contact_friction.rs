@@ -3,53 +3,13 @@
 //! one thrown along a floor stops where μ g stops it.
 
 use anima_ode::contact::{Contact, ContactModel, Friction};
-use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, Stepper};
+mod common;
+
+use anima_ode::{Integrator, State, Stepper};
+use common::Particles;
 use glam::DVec3;
 
 const G: f64 = 9.81;
-
-/// Particles under gravity alone.
-struct Falling {
-    masses: Vec<f64>,
-    prescribed: Vec<bool>,
-}
-
-impl Linearized<DVec3> for Falling {
-    fn masses(&self) -> &[f64] {
-        &self.masses
-    }
-    fn prescribed(&self) -> &[bool] {
-        &self.prescribed
-    }
-    fn pattern(&self) -> &[(u32, u32)] {
-        &[]
-    }
-    fn force_and_jacobians(
-        &mut self,
-        _t: f64,
-        _x: &[DVec3],
-        _v: &[DVec3],
-        f: &mut [DVec3],
-        _jac: &mut Jacobians<DVec3>,
-    ) {
-        for (f, m) in f.iter_mut().zip(&self.masses) {
-            *f = DVec3::new(0.0, 0.0, -G * m);
-        }
-    }
-}
-
-impl OdeSystem for Falling {
-    type Coord = DVec3;
-    fn n_coords(&self) -> usize {
-        self.masses.len()
-    }
-    fn acceleration(&mut self, _t: f64, _x: &[DVec3], _v: &[DVec3], a: &mut [DVec3]) {
-        a.fill(DVec3::new(0.0, 0.0, -G));
-    }
-    fn linearized(&mut self) -> Option<&mut dyn Linearized<DVec3>> {
-        Some(self)
-    }
-}
 
 /// The plane through the origin with unit normal `normal` and friction μ: a particle whose step ends
 /// within 1 mm of its outer side, or beyond it, touches it at the point under its end.
@@ -83,7 +43,8 @@ fn on_slope(friction: Friction, theta: f64, mu: f64, v0: f64, seconds: f64) -> (
     let h = 1.0 / 60.0;
     let normal = DVec3::new(theta.sin(), 0.0, theta.cos());
     let down = DVec3::new(theta.cos(), 0.0, -theta.sin());
-    let mut sys = Falling { masses: vec![0.01], prescribed: vec![false] };
+    let mut sys =
+        Particles { masses: vec![0.01], prescribed: vec![false], gravity: DVec3::new(0.0, 0.0, -G) };
     let mut plane = Plane { normal, mu };
     let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, 1);
     stepper.set_friction(friction);
