@@ -152,12 +152,21 @@ pub enum Friction {
     /// η times enters the system matrix's diagonal, so the solve sees friction as the damping it is and
     /// Newton can converge on it; sticking becomes creep slower than ε. No regimes to chatter.
     ///
-    /// Measured on the 65² Bunny drape of `cargo xtask bench --scale` (3 s at 1/60 s, ε = 1 mm/s, each
-    /// model against its own converged run at 1/960 s; `cargo run --release -p anima-lab --example
-    /// scale_probe`): Newton iterations per step 4.93 → 3.69; RMS error 17.2 → 10.5 mm; and the two
-    /// converged runs with gravity × (1 ± 10⁻⁹) end 7.0 mm apart with the active set, 0.02 mm apart
-    /// smoothed: the drape's sensitivity came from the regimes' switching, and smoothed its error is a
-    /// discretisation error that a finer step lowers, not noise.
+    /// Measured on the 65² drapes of `cargo xtask bench --scale` (3 s at 1/60 s, ε = 1 mm/s, each model
+    /// against its own converged run at 1/960 s; `cargo run --release -p anima-lab --example
+    /// scale_probe` with `FRICTION_SMOOTHING`), active set → smoothed:
+    ///
+    /// | drape | Newton a step | CG a step | RMS error | band of the converged runs | ms a step |
+    /// |---|---|---|---|---|---|
+    /// | Bunny | 4.93 → 3.69 | 19.0 → 16.0 | 17.2 → 10.5 mm | 7.0 → 0.02 mm | 44.3, 47.1 → 42.3, 41.2 |
+    /// | sphere | 4.97 → 3.55 | 18.4 → 24.1 | 19.5 → 6.1 mm | 1.7 → 0.00 mm | 46.0, 48.9 → 44.4, 42.7 |
+    ///
+    /// (the band: two converged runs with gravity × (1 ± 10⁻⁹); the times: two runs of each, alternated,
+    /// 2 threads.) The drapes' sensitivity came from the regimes' switching; smoothed, the error is a
+    /// discretisation error that a finer step lowers, not noise. A step costs less than its Newton count
+    /// says: a sticking particle, filtered out of the active set's solve, stays in this one under a drag
+    /// up to 2 μ F_n/ε, and on the sphere CG then takes 6.8 iterations a solve instead of 3.7. ε = 1 cm/s
+    /// saves a little more (Newton 3.38 on the sphere) and errs 27.6 mm: the creep it allows is error.
     Smoothed {
         /// ε, m/s: the sliding speed below which friction turns into a stiff viscous drag.
         speed_m_s: f64,
