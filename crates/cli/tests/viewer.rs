@@ -2,6 +2,8 @@
 //! error, plays, and once its timeline is scrubbed to frame k shows frame k's positions (the sheet's
 //! against the run's `sheet_<k>.obj`, the walker's pelvis against the file's keyframe k); a screenshot
 //! of each is left in the target folder for a person to look at. Ctrl-C ends the server cleanly.
+//! `anima run --live` in the same Chromium: a slider moved on the live page of a paused walk changes
+//! the running controller.
 //!
 //! Ignored by `cargo test`: it needs Chromium (Debian's `chromium`, or the binary named by
 //! `ANIMA_CHROMIUM`). `cargo xtask test --viewer` installs it when it is missing and runs these.
@@ -392,5 +394,80 @@ fn viewer_plays_a_walk_and_shows_the_frame_scrubbed_to() {
     assert!((track[k][0] - track[0][0]).abs() > 0.1, "the walker moved by frame {k}");
     screenshot(&viewer.url, &dir.join("profile"), k, "walk");
     viewer.interrupt();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A process killed when dropped: a failing test leaves no `anima run --live` behind.
+struct KilledOnDrop(Child);
+
+impl Drop for KilledOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `anima run --live` in Chromium: the live page loads without a console error, offers a slider per
+/// controller parameter, and moving one changes the running controller at its next control step (the
+/// run's note on the page, and the summary's `parameter_changes`).
+#[test]
+#[ignore = "needs chromium: cargo xtask test --viewer"]
+fn live_page_slider_changes_the_running_controller() {
+    let dir = temp_dir("live");
+    let out = dir.join("out");
+    let mut run = KilledOnDrop(
+        anima()
+            .args([
+                "run",
+                "--quiet",
+                "--no-pictures",
+                "--duration",
+                "3",
+                "--live",
+                "--paused",
+                "--port",
+                "0",
+                "--out",
+            ])
+            .arg(&out)
+            .arg(scenes().join("walk.ron"))
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let mut line = String::new();
+    BufReader::new(run.0.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let url = line.split_whitespace().find(|w| w.starts_with("http://127.0.0.1:")).map(str::to_owned);
+    let url = url.unwrap_or_else(|| panic!("no address in {line:?}"));
+    let mut page = DevTools::start(&dir.join("profile"));
+    page.call("Page.navigate", serde_json::json!({ "url": url }));
+    let until = |page: &mut DevTools, expression: &str, what: &str| {
+        let start = Instant::now();
+        while page.evaluate(expression) != Value::Bool(true) {
+            assert!(start.elapsed() < Duration::from_secs(60), "{what} in 60 s: {:?}", page.errors);
+            std::thread::sleep(Duration::from_millis(200));
+        }
+    };
+    until(&mut page, "window.anima?.ready === true && window.anima.frames > 0", "no parameters or frame");
+    // The first slider moved to three quarters of its range, as a person drags it.
+    let moved = page.evaluate(
+        "(() => { const s = document.querySelector('#params input'); \
+          s.value = Number(s.min) + 0.75 * (Number(s.max) - Number(s.min)); \
+          s.dispatchEvent(new Event('change')); return [s.dataset.name, Number(s.value)]; })()",
+    );
+    let (name, value) = (moved[0].as_str().unwrap().to_owned(), moved[1].as_f64().unwrap());
+    until(&mut page, "window.anima.changes.length === 1", "the run took no parameter");
+    let change = page.evaluate("window.anima.changes[0]");
+    assert_eq!(change["name"], name.as_str());
+    assert_eq!(change["step"], 1);
+    page.evaluate("document.getElementById('resume').click(), true");
+    let status = wait(&mut run.0, Duration::from_secs(120)).expect("the live run did not end");
+    assert!(status.success());
+    assert_eq!(page.errors, Vec::<String>::new(), "console errors on the live page");
+    let summary: Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let changes = summary["parameter_changes"].as_array().unwrap();
+    assert_eq!(changes.len(), 1);
+    assert!((changes[0]["value"].as_f64().unwrap() - value).abs() <= 0.5, "{changes:?} for {value}");
+    drop(page);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -108,7 +108,12 @@ where
         return;
     }
     loop {
+        // Biased, notes before frames: the run tells the page what to draw (`{"mesh":…}`) before the
+        // frame that needs it, and both wait in their channels until a page connects; an unbiased
+        // select sent a paused run's first frame before its mesh half the time, and the page, with no
+        // mesh to put the points on, showed nothing until the run went on.
         tokio::select! {
+            biased;
             incoming = ws.next() => {
                 let reply = match incoming {
                     Some(Ok(Message::Text(text))) => answer(live, text.as_str()),
