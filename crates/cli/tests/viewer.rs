@@ -412,7 +412,7 @@ impl Drop for KilledOnDrop {
 /// run's note on the page, and the summary's `parameter_changes`).
 #[test]
 #[ignore = "needs chromium: cargo xtask test --viewer"]
-fn live_page_slider_changes_the_running_controller() {
+fn viewer_live_slider_changes_the_running_controller() {
     let dir = temp_dir("live");
     let out = dir.join("out");
     let mut run = KilledOnDrop(
