@@ -6,6 +6,8 @@ mod progress;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FLEX3D_GRAVITY, FrictionMode, StaticResponse};
@@ -308,6 +310,11 @@ struct RunArgs {
     /// With `--live`: start paused after the first frame, until the page says resume or step.
     #[arg(long, requires = "live")]
     paused: bool,
+    /// With `--live`: once a page has connected, its closing (the tab closed, the connection dropped)
+    /// ends the run as Ctrl-C does: the files written so far stay, whole, the server stops and the exit
+    /// status is 130. Without it the run goes on with no page.
+    #[arg(long, requires = "live")]
+    stop_with_page: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -534,9 +541,30 @@ fn run_live(scene: &Scene, label: &str, mut opts: RunOptions, bar: Bar, args: &R
         anima_view::Live { params: live::view_params(&params), frames: frames_rx, commands: commands_tx };
     let server = anima_view::Server::bind_live(&args.out, args.port, view)?;
     let stopper = server.stopper();
-    println!("anima run --live: http://{}/ (the page follows the run; Ctrl-C ends it)", server.local_addr());
+    // With --stop-with-page, a page that goes away while the run is going stops the server, and the
+    // serving thread then ends the run as Ctrl-C does.
+    let finished = Arc::new(AtomicBool::new(false));
+    let page_gone = Arc::new(AtomicBool::new(false));
+    if args.stop_with_page {
+        let (finished, page_gone, stopper) = (finished.clone(), page_gone.clone(), stopper.clone());
+        server.on_page_closed(move || {
+            if !finished.load(Ordering::SeqCst) {
+                page_gone.store(true, Ordering::SeqCst);
+                stopper.stop();
+            }
+        });
+    }
+    let ends = if args.stop_with_page { "Ctrl-C or closing the page ends it" } else { "Ctrl-C ends it" };
+    println!("anima run --live: http://{}/ (the page follows the run; {ends})", server.local_addr());
     std::io::stdout().flush()?;
-    let serving = std::thread::spawn(move || server.run());
+    let serving = std::thread::spawn(move || {
+        let served = server.run();
+        if page_gone.load(Ordering::SeqCst) {
+            eprintln!("\nanima: the page closed");
+            interrupted();
+        }
+        served
+    });
     let mut link = anima_run::live::Live::new(live::ViewLink { frames, commands }, params);
     if args.paused {
         link = link.start_paused();
@@ -544,6 +572,7 @@ fn run_live(scene: &Scene, label: &str, mut opts: RunOptions, bar: Bar, args: &R
     opts.live = Some(link.clone());
     let mut progress = live::LiveBar::new(bar, link.clone());
     let summary = anima_run::run::run(scene, label, &opts, &mut progress);
+    finished.store(true, Ordering::SeqCst);
     let end = match &summary {
         Ok(s) => s.error.clone().unwrap_or_else(|| format!("{} steps, {} frames", s.steps, s.frames)),
         Err(e) => format!("{e:#}"),
@@ -742,11 +771,7 @@ fn main() -> ExitCode {
         command => {
             // An interrupt leaves no half-written temporary file behind; every finished file is whole
             // already.
-            let _ = ctrlc::set_handler(|| {
-                anima_run::output::remove_temporaries();
-                eprintln!("\nanima: interrupted");
-                std::process::exit(130);
-            });
+            let _ = ctrlc::set_handler(|| interrupted());
             match command {
                 Command::Run(args) => run_command(args),
                 Command::Optimise(args) => optimise_command(args),
@@ -758,6 +783,15 @@ fn main() -> ExitCode {
         }
     };
     exit_code(result)
+}
+
+/// Ends the process as an interrupted command: no half-written temporary file left behind (every
+/// finished file is whole already), exit status 130. Ctrl-C, and `--live --stop-with-page` when the
+/// page goes away.
+fn interrupted() -> ! {
+    anima_run::output::remove_temporaries();
+    eprintln!("\nanima: interrupted");
+    std::process::exit(130);
 }
 
 /// The exit code of a command's result, its error said on standard error.

@@ -171,3 +171,124 @@ fn a_slider_moved_on_the_live_page_changes_the_running_controller() {
     }
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// The child killed (and reaped) when the test ends, however it ends.
+struct KillOnDrop(std::process::Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A paused live walk into `out` with `extra` flags, and the address it prints.
+fn start_paused_walk(out: &Path, extra: &[&str]) -> (KillOnDrop, String) {
+    let _ = std::fs::remove_dir_all(out);
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/walk.ron");
+    let child = Command::new(env!("CARGO_BIN_EXE_anima"))
+        .args(["run", "--quiet", "--no-pictures", "--duration", "3", "--live", "--paused", "--port", "0"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .arg(&scene)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut child = KillOnDrop(child);
+    let mut line = String::new();
+    BufReader::new(child.0.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    let addr = line
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("http://"))
+        .map(|a| a.trim_end_matches('/').to_owned())
+        .unwrap_or_else(|| panic!("no address in {line:?}"));
+    (child, addr)
+}
+
+/// A WebSocket on `/live`, the parameters message read.
+fn open_live(addr: &str) -> TcpStream {
+    let mut s = TcpStream::connect(addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
+    write!(
+        s,
+        "GET /live HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
+         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
+    )
+    .unwrap();
+    let mut response = Vec::new();
+    let mut byte = [0u8];
+    while !response.ends_with(b"\r\n\r\n") {
+        assert_eq!(s.read(&mut byte).unwrap(), 1, "the server closed during the handshake");
+        response.push(byte[0]);
+    }
+    assert!(response.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&response));
+    let params: Value = serde_json::from_str(&next_text(&mut s)).unwrap();
+    assert!(params["params"].is_array(), "{params}");
+    s
+}
+
+/// One masked client close frame (status 1000).
+fn close_frame() -> Vec<u8> {
+    let key = [0x21, 0x43, 0x65, 0x87];
+    let payload = 1000u16.to_be_bytes();
+    let mut f = vec![0x88, 0x80 | payload.len() as u8];
+    f.extend_from_slice(&key);
+    f.extend(payload.iter().enumerate().map(|(i, b)| b ^ key[i % 4]));
+    f
+}
+
+/// The child's exit status once it exits, `None` if it still runs after `within`.
+fn exits_within(child: &mut KillOnDrop, within: Duration) -> Option<std::process::ExitStatus> {
+    let start = std::time::Instant::now();
+    while start.elapsed() < within {
+        if let Some(status) = child.0.try_wait().unwrap() {
+            return Some(status);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
+}
+
+/// The output folder holds no temporary: every file is whole.
+fn assert_whole(out: &Path) {
+    for entry in std::fs::read_dir(out).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        assert!(!name.contains(".tmp"), "{name} left in the output folder");
+    }
+}
+
+#[test]
+fn with_stop_with_page_the_run_ends_when_the_page_closes() {
+    // A close frame, then a connection that just drops: either ends the run as Ctrl-C does.
+    for (i, polite) in [true, false].into_iter().enumerate() {
+        let out = std::env::temp_dir().join(format!("anima-live-stop-{}-{i}", std::process::id()));
+        let (mut child, addr) = start_paused_walk(&out, &["--stop-with-page"]);
+        let mut s = open_live(&addr);
+        if polite {
+            s.write_all(&close_frame()).unwrap();
+        }
+        drop(s);
+        let status = exits_within(&mut child, Duration::from_secs(10))
+            .unwrap_or_else(|| panic!("the run went on after the page closed (close frame: {polite})"));
+        assert_eq!(status.code(), Some(130), "an interrupted run's status");
+        assert!(out.is_dir());
+        assert_whole(&out);
+        assert!(!out.join("summary.json").exists(), "an interrupted run writes no summary");
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}
+
+#[test]
+fn without_stop_with_page_the_run_outlives_its_page() {
+    let out = std::env::temp_dir().join(format!("anima-live-stay-{}", std::process::id()));
+    let (mut child, addr) = start_paused_walk(&out, &[]);
+    let mut s = open_live(&addr);
+    s.write_all(&close_frame()).unwrap();
+    drop(s);
+    assert!(exits_within(&mut child, Duration::from_secs(2)).is_none(), "the run ended with its page");
+    // Another page may watch it still.
+    drop(open_live(&addr));
+    drop(child);
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -134,7 +134,12 @@ impl Server {
             return Err(ViewError::NotAFolder(dir.to_path_buf()));
         }
         let Live { params, frames, commands } = live;
-        let live = socket::LiveSite { params, frames: std::sync::Mutex::new(Some(frames)), commands };
+        let live = socket::LiveSite {
+            params,
+            frames: std::sync::Mutex::new(Some(frames)),
+            commands,
+            on_close: socket::OnClose::default(),
+        };
         Self::bind_inner(dir, port, Some(live))
     }
 
@@ -159,6 +164,19 @@ impl Server {
     /// Where the server listens: 127.0.0.1 and its port.
     pub fn local_addr(&self) -> SocketAddr {
         self.site.addr
+    }
+
+    /// Calls `f` once, on the server's thread, when the first page that connected to `/live` goes away:
+    /// it closed its socket, the connection dropped, or it broke the protocol. Not when the run's
+    /// channels close (the run ended) or the server stops. A later call replaces an `f` not yet called;
+    /// a server that is not live never calls it. `anima run --live --stop-with-page` stops the run
+    /// from `f`.
+    pub fn on_page_closed(&self, f: impl FnOnce() + Send + 'static) {
+        if let Some(live) = &self.site.live
+            && let Ok(mut slot) = live.on_close.0.lock()
+        {
+            *slot = Some(Box::new(f));
+        }
     }
 
     /// A handle that ends [`Server::run`].

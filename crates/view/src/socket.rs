@@ -33,6 +33,19 @@ pub(crate) struct LiveSite {
     /// Taken by the open socket, put back when it closes.
     pub frames: Mutex<Option<FrameReceiver>>,
     pub commands: CommandSender,
+    /// Called once, when the first page that connected closes its socket ([`crate::Server::on_page_closed`]).
+    pub on_close: OnClose,
+}
+
+/// What to do when a page goes away: nothing until [`crate::Server::on_page_closed`] sets it.
+#[derive(Default)]
+pub(crate) struct OnClose(pub Mutex<Option<Box<dyn FnOnce() + Send>>>);
+
+impl std::fmt::Debug for OnClose {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let set = self.0.lock().is_ok_and(|c| c.is_some());
+        f.write_str(if set { "OnClose(set)" } else { "OnClose(none)" })
+    }
 }
 
 /// The answer to a request for `/live`: 101 and a socket task, or an HTTP error.
@@ -77,8 +90,11 @@ where
                 .max_frame_size(Some(MAX_MESSAGE_BYTES));
             let ws =
                 WebSocketStream::from_raw_socket(TokioIo::new(upgraded), Role::Server, Some(config)).await;
-            if let Some(live) = &site.live {
-                serve_socket(ws, live, &mut frames).await;
+            if let Some(live) = &site.live
+                && serve_socket(ws, live, &mut frames).await == Ended::PageGone
+                && let Some(on_close) = live.on_close.0.lock().ok().and_then(|mut c| c.take())
+            {
+                on_close();
             }
         }
         if let Some(live) = &site.live
@@ -98,14 +114,23 @@ where
     r
 }
 
+/// Why a socket ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ended {
+    /// The page closed it, the connection dropped, or the page broke the protocol.
+    PageGone,
+    /// The run's channels closed: the run is over.
+    RunGone,
+}
+
 /// The page's commands in, the run's frames out, until either side goes away or the page breaks
 /// the protocol.
-async fn serve_socket<S>(mut ws: WebSocketStream<S>, live: &LiveSite, frames: &mut FrameReceiver)
+async fn serve_socket<S>(mut ws: WebSocketStream<S>, live: &LiveSite, frames: &mut FrameReceiver) -> Ended
 where
     S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin,
 {
     if ws.send(Message::text(params_json(&live.params))).await.is_err() {
-        return;
+        return Ended::PageGone;
     }
     loop {
         // Biased, notes before frames: the run tells the page what to draw (`{"mesh":…}`) before the
@@ -120,22 +145,22 @@ where
                     Some(Ok(Message::Binary(_))) => "error send commands as text".to_owned(),
                     Some(Ok(Message::Ping(_) | Message::Pong(_) | Message::Frame(_))) => continue,
                     // Closed, gone, or broke the protocol (too long, malformed): this socket ends.
-                    Some(Ok(Message::Close(_)) | Err(_)) | None => return,
+                    Some(Ok(Message::Close(_)) | Err(_)) | None => return Ended::PageGone,
                 };
                 if ws.send(Message::text(reply)).await.is_err() {
-                    return;
+                    return Ended::PageGone;
                 }
             }
             note = frames.1.recv() => {
-                let Some(note) = note else { return };
+                let Some(note) = note else { return Ended::RunGone };
                 if ws.send(Message::text(note)).await.is_err() {
-                    return;
+                    return Ended::PageGone;
                 }
             }
             frame = frames.0.recv() => {
-                let Some(frame) = frame else { return };
+                let Some(frame) = frame else { return Ended::RunGone };
                 if ws.send(Message::binary(frame.to_bytes())).await.is_err() {
-                    return;
+                    return Ended::PageGone;
                 }
             }
         }
