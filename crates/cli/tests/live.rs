@@ -69,51 +69,8 @@ fn say(s: &mut TcpStream, text: &str, notes: &mut Vec<String>) -> String {
 #[test]
 fn a_slider_moved_on_the_live_page_changes_the_running_controller() {
     let out = std::env::temp_dir().join(format!("anima-live-cli-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/walk.ron");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_anima"))
-        .args([
-            "run",
-            "--quiet",
-            "--no-pictures",
-            "--duration",
-            "3",
-            "--live",
-            "--paused",
-            "--port",
-            "0",
-            "--out",
-        ])
-        .arg(&out)
-        .arg(&scene)
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let addr = line
-        .split_whitespace()
-        .find_map(|w| w.strip_prefix("http://"))
-        .map(|a| a.trim_end_matches('/').to_owned())
-        .unwrap_or_else(|| panic!("no address in {line:?}"));
-
-    let mut s = TcpStream::connect(&addr).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
-    write!(
-        s,
-        "GET /live HTTP/1.1\r\nHost: {addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n\
-         Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n"
-    )
-    .unwrap();
-    let mut response = Vec::new();
-    let mut byte = [0u8];
-    while !response.ends_with(b"\r\n\r\n") {
-        assert_eq!(s.read(&mut byte).unwrap(), 1, "the server closed during the handshake");
-        response.push(byte[0]);
-    }
-    assert!(response.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&response));
-
-    let params: Value = serde_json::from_str(&next_text(&mut s)).unwrap();
+    let (mut child, addr) = start_paused_walk(&out, &[]);
+    let (mut s, params) = open_live(&addr);
     let params = params["params"].as_array().unwrap();
     assert!(!params.is_empty(), "a walker's controller offers its parameters");
     let p = &params[0];
@@ -153,7 +110,7 @@ fn a_slider_moved_on_the_live_page_changes_the_running_controller() {
     assert!(notes.iter().all(|n| !n.starts_with("{\"refused\"")), "{notes:?}");
     assert!(notes.iter().any(|n| n.starts_with("{\"done\"")), "{notes:?}");
 
-    assert!(child.wait().unwrap().success());
+    assert!(child.0.wait().unwrap().success());
     let summary: Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps"], 60, "{summary}");
     assert!(summary["error"].is_null(), "{summary}");
@@ -206,8 +163,8 @@ fn start_paused_walk(out: &Path, extra: &[&str]) -> (KillOnDrop, String) {
     (child, addr)
 }
 
-/// A WebSocket on `/live`, the parameters message read.
-fn open_live(addr: &str) -> TcpStream {
+/// A WebSocket on `/live`, and the parameters message it opens with.
+fn open_live(addr: &str) -> (TcpStream, Value) {
     let mut s = TcpStream::connect(addr).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(60))).unwrap();
     write!(
@@ -225,7 +182,7 @@ fn open_live(addr: &str) -> TcpStream {
     assert!(response.starts_with(b"HTTP/1.1 101"), "{}", String::from_utf8_lossy(&response));
     let params: Value = serde_json::from_str(&next_text(&mut s)).unwrap();
     assert!(params["params"].is_array(), "{params}");
-    s
+    (s, params)
 }
 
 /// One masked client close frame (status 1000).
@@ -264,7 +221,7 @@ fn with_stop_with_page_the_run_ends_when_the_page_closes() {
     for (i, polite) in [true, false].into_iter().enumerate() {
         let out = std::env::temp_dir().join(format!("anima-live-stop-{}-{i}", std::process::id()));
         let (mut child, addr) = start_paused_walk(&out, &["--stop-with-page"]);
-        let mut s = open_live(&addr);
+        let (mut s, _) = open_live(&addr);
         if polite {
             s.write_all(&close_frame()).unwrap();
         }
@@ -283,7 +240,7 @@ fn with_stop_with_page_the_run_ends_when_the_page_closes() {
 fn without_stop_with_page_the_run_outlives_its_page() {
     let out = std::env::temp_dir().join(format!("anima-live-stay-{}", std::process::id()));
     let (mut child, addr) = start_paused_walk(&out, &[]);
-    let mut s = open_live(&addr);
+    let (mut s, _) = open_live(&addr);
     s.write_all(&close_frame()).unwrap();
     drop(s);
     assert!(exits_within(&mut child, Duration::from_secs(2)).is_none(), "the run ended with its page");
