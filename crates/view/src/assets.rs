@@ -1,4 +1,4 @@
-//! What the server answers with: the page and three.js, embedded, and the run's files, each at a
+//! What the server answers with: the pages, their style sheet and three.js, embedded, and the run's files, each at a
 //! fixed path. Nothing else exists.
 
 /// An embedded file: its path on the server, its media type and its bytes.
@@ -20,6 +20,8 @@ macro_rules! embed {
 pub(crate) const EMBEDDED: &[Embedded] = &[
     embed!("/", "text/html; charset=utf-8", "index.html"),
     embed!("/viewer.js", JS, "viewer.js"),
+    // The layout the player and the live page share.
+    embed!("/page.css", "text/css; charset=utf-8", "page.css"),
     // A live run's page (`anima run --live`), served at `/` in place of the player while the run goes.
     embed!("/live.html", "text/html; charset=utf-8", "live.html"),
     embed!("/live.js", JS, "live.js"),

@@ -92,6 +92,38 @@ fn get(addr: SocketAddr, path: &str) -> (u16, String) {
     send(addr, format!("GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").as_bytes())
 }
 
+/// The local files a page names in `href="/…"` or `src="/…"`.
+fn local_references(page: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for key in ["href=\"/", "src=\"/"] {
+        for (at, _) in page.match_indices(key) {
+            let rest = &page[at + key.len() - 1..];
+            out.push(rest[..rest.find('"').expect("a closing quote")].to_owned());
+        }
+    }
+    out
+}
+
+#[test]
+fn every_file_the_pages_name_is_served() {
+    let dir = run_folder("references");
+    let s = serve(&dir);
+    // The player, and the live page (which a live server answers `/` with).
+    for (page, script) in [("/", "/viewer.js"), ("/live.html", "/live.js")] {
+        let (status, body) = get(s.addr, page);
+        assert_eq!(status, 200, "{page}: {body}");
+        let names = local_references(&body);
+        assert!(
+            names.iter().any(|n| n == "/page.css") && names.iter().any(|n| n == script),
+            "{page}: {names:?}"
+        );
+        for name in names {
+            let (status, body) = get(s.addr, &name);
+            assert_eq!(status, 200, "{page} names {name}: {body}");
+        }
+    }
+}
+
 #[test]
 fn serves_the_page_three_and_the_run() {
     let dir = run_folder("serves");
