@@ -494,7 +494,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
         summary_path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")),
     )?;
     if !args.quiet {
-        eprintln!("anima: {label} — {}", describe(&scene));
+        eprintln!("anima: {label} — {}", scene.describe());
     }
     let mut bar = Bar::new(!args.quiet);
     let summary = if args.live {
@@ -530,10 +530,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
 /// A run with its live page: the server on its own thread for the run's length. The page is told
 /// when the run has ended; the server then stops (`anima view OUT` plays the finished run).
 fn run_live(scene: &Scene, label: &str, mut opts: RunOptions, bar: Bar, args: &RunArgs) -> Result<Summary> {
-    let params = match scene {
-        Scene::Character(c) => anima_run::live::parameters(&c.controller),
-        _ => Vec::new(),
-    };
+    let params = anima_run::live::scene_parameters(scene);
     let (frames, frames_rx) = anima_view::live::frame_channel();
     let (commands_tx, commands) = anima_view::live::command_channel();
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -586,48 +583,6 @@ fn run_live(scene: &Scene, label: &str, mut opts: RunOptions, bar: Bar, args: &R
         .map_err(|_| anyhow::anyhow!("the live server panicked"))?
         .context("serving the live page")?;
     summary
-}
-
-/// One line on what is about to run.
-fn describe(scene: &Scene) -> String {
-    match scene {
-        Scene::Flex3d(l) => format!(
-            "FLEX3D, {} steps of {} s ({}), {} frames",
-            l.scene.n_steps(),
-            l.scene.dt_s,
-            l.scene.integrator,
-            l.scene.n_frames()
-        ),
-        Scene::Sheet(s) => format!(
-            "sheet of {} particles, {} s at {} s ({})",
-            s.sheet.n * s.sheet.n,
-            s.duration_s,
-            s.dt_s,
-            s.integrator
-        ),
-        Scene::Oliveira(l) => format!(
-            "Oliveira drape, {} s ({}, {:?}){}",
-            l.scene.duration_s,
-            l.scene.integrator,
-            l.scene.time_step,
-            l.remesher.map(|r| format!(", remeshed: {r:?}")).unwrap_or_default()
-        ),
-        Scene::Body(l) => format!(
-            "figures `{}`: {} models, {} steps of {} s",
-            l.scene.name,
-            l.scene.models.len(),
-            l.scene.n_steps(),
-            l.scene.world.dt
-        ),
-        Scene::Character(l) => format!(
-            "character `{}`: {} models driven by `{}`, {} steps of {} s",
-            l.scene.name,
-            l.scene.models.len(),
-            l.controller.name(),
-            l.scene.n_steps(),
-            l.scene.world.dt
-        ),
-    }
 }
 
 /// The summary's main numbers on standard error.

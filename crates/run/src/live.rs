@@ -115,6 +115,15 @@ impl Live {
     }
 }
 
+/// The parameters a live page may set for `scene`: a character's controller's ([`parameters`]);
+/// none for the other kinds.
+pub fn scene_parameters(scene: &anima_scene::Scene) -> Vec<LiveParam> {
+    match scene {
+        anima_scene::Scene::Character(c) => parameters(&c.controller),
+        _ => Vec::new(),
+    }
+}
+
 /// Every parameter of `controller` a page may set, in table order, named by its label with the
 /// characters a command word cannot hold replaced (`W-LEGS/E1/hip_l` is `W-LEGS.E1.hip_l`); a name
 /// that repeats gets `.2`, `.3`… .

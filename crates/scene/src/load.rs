@@ -102,6 +102,48 @@ impl Scene {
         }
     }
 
+    /// One line on what a run of the scene is about to do (what `anima run` prints first).
+    pub fn describe(&self) -> String {
+        match self {
+            Scene::Flex3d(l) => format!(
+                "FLEX3D, {} steps of {} s ({}), {} frames",
+                l.scene.n_steps(),
+                l.scene.dt_s,
+                l.scene.integrator,
+                l.scene.n_frames()
+            ),
+            Scene::Sheet(s) => format!(
+                "sheet of {} particles, {} s at {} s ({})",
+                s.sheet.n * s.sheet.n,
+                s.duration_s,
+                s.dt_s,
+                s.integrator
+            ),
+            Scene::Oliveira(l) => format!(
+                "Oliveira drape, {} s ({}, {:?}){}",
+                l.scene.duration_s,
+                l.scene.integrator,
+                l.scene.time_step,
+                l.remesher.map(|r| format!(", remeshed: {r:?}")).unwrap_or_default()
+            ),
+            Scene::Body(l) => format!(
+                "figures `{}`: {} models, {} steps of {} s",
+                l.scene.name,
+                l.scene.models.len(),
+                l.scene.n_steps(),
+                l.scene.world.dt
+            ),
+            Scene::Character(l) => format!(
+                "character `{}`: {} models driven by `{}`, {} steps of {} s",
+                l.scene.name,
+                l.scene.models.len(),
+                l.controller.name(),
+                l.scene.n_steps(),
+                l.scene.world.dt
+            ),
+        }
+    }
+
     /// The FLEX3D scene, or an error naming the kind `path` holds instead.
     pub fn into_flex3d(self, path: &Path) -> Result<LoadedFlex3d, SceneError> {
         match self {
