@@ -188,7 +188,9 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// A fresh stepper for `n_coords` coordinates (after a topology change) with this one's integrator,
-    /// linear solver, Newton iterations, ρ∞ and profiling; the history starts empty.
+    /// linear solver, Newton iterations, ρ∞, friction model and profiling; the history starts empty
+    /// (generalised-α then takes its acceleration from M⁻¹ f: see [`Stepper::zero_acceleration`] for a
+    /// state that rests on contacts).
     pub fn resized(&self, n_coords: usize) -> Self {
         let mut s = Stepper::new(self.integrator, n_coords);
         if let (Some(from), Some(to)) = (&self.implicit, &mut s.implicit) {
@@ -328,6 +330,19 @@ impl<C: Coord> Stepper<C> {
             return;
         }
         self.reset_history();
+    }
+
+    /// Generalised-α's acceleration set to zero at every coordinate, as [`Stepper::reset_history_of`]
+    /// does for the coordinates it is given (the other integrators forget their history, as
+    /// [`Stepper::reset_history`]). For a state the method did not step to, such as a remeshed cloth's
+    /// (see [`Stepper::resized`]).
+    pub fn zero_acceleration(&mut self) {
+        self.reset_history();
+        if let Some(ws) = &mut self.implicit
+            && ws.alpha.is_some()
+        {
+            ws.alpha_acceleration_mut().fill(C::default());
+        }
     }
 
     /// Saves what the implicit methods carry from one step to the next (generalised-α's acceleration,

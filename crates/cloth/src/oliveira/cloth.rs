@@ -821,7 +821,7 @@ impl OliveiraCloth {
     /// Takes a remeshed cloth (the adaptive drivers of `oliveira::adaptive`): the new mesh and its
     /// particles' state, masses and drag from the new vertex areas, springs from the new edges, bending
     /// elements from the new interior edges, m_min and k^e_max (hence the next Δt), a fresh stepper of
-    /// the same integrator, and particle P's new index. Time, step count and contact history are kept.
+    /// the same integrator (generalised-α's acceleration zero), and particle P's new index. Time, step count and contact history are kept.
     pub(crate) fn replace_mesh(
         &mut self,
         mesh: MaterialMesh,
@@ -860,6 +860,12 @@ impl OliveiraCloth {
         m.mass = mass;
         m.invalidate_implicit();
         self.stepper = self.stepper.resized(n);
+        // Generalised-α's acceleration restarts at zero, not at M⁻¹ f: the remeshed state is not one the
+        // method stepped to, and M⁻¹ f of a particle resting on an object is its whole weight and its
+        // springs' pull, unanswered by the contact, which the next step would carry explicitly (it
+        // blew the drapes up within steps of the first contact at 1/60 s; the reason
+        // `Stepper::reset_history_of` zeroes what a response touched).
+        self.stepper.zero_acceleration();
         self.now = State::new(x, v);
         self.next = State::zeros(n);
         self.clearance = vec![0.0; n];
