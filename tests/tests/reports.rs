@@ -7,6 +7,9 @@
 //! `nunes-results.md`'s run time per iteration, `benchmarks.md`) or take minutes to an hour to
 //! regenerate (`nunes-optimisers.md`, the SIMBICON-style section of `nunes-simbicon.md`, the adaptive
 //! report): their commands rewrite them, and a partial run rewrites only its own sections.
+//!
+//! Prose that quotes a generated report is checked against it: the README's benchmark figures and the
+//! measurements `docs/reproduction/flex3d.md` states.
 
 use anima_cloth::flex3d::FrictionMode;
 use anima_lab::repo::Repo;
@@ -102,4 +105,125 @@ fn the_readme_quotes_the_benchmark_reports_as_they_stand() {
     for q in quoted {
         assert!(flat.contains(&q), "the README should say `{q}`, as the reports do");
     }
+}
+
+/// The decimal numbers of `text` (`61.4`, `−6.6`, `1.0·10⁻⁴`, `1.01e-4`), each with its value and half
+/// the unit of its last printed digit (the rounding a quoted value may carry).
+fn decimals(text: &str) -> Vec<(String, f64, f64)> {
+    let superscript = |c: char| "⁰¹²³⁴⁵⁶⁷⁸⁹".chars().position(|s| s == c);
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let starts = chars[i].is_ascii_digit()
+            && (i == 0 || !(chars[i - 1].is_ascii_alphanumeric() || chars[i - 1] == '.'));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let negative = i > 0 && (chars[i - 1] == '-' || chars[i - 1] == '−');
+        let begin = i;
+        while i < chars.len() && chars[i].is_ascii_digit() {
+            i += 1;
+        }
+        // Only numbers with a fractional part: integers are counts and frame numbers.
+        if !(i + 1 < chars.len() && chars[i] == '.' && chars[i + 1].is_ascii_digit()) {
+            continue;
+        }
+        i += 1;
+        let fraction = i;
+        while i < chars.len() && chars[i].is_ascii_digit() {
+            i += 1;
+        }
+        let digits = (i - fraction) as i32;
+        let mantissa: f64 = chars[begin..i].iter().collect::<String>().parse().unwrap();
+        let mut exponent = 0i32;
+        let rest: String = chars[i..chars.len().min(i + 8)].iter().collect();
+        if let Some(tail) = rest.strip_prefix("·10") {
+            let mut t = tail.chars().peekable();
+            let sign = if t.peek() == Some(&'⁻') {
+                t.next();
+                -1
+            } else {
+                1
+            };
+            let mut e = 0i32;
+            let mut n = 0;
+            while let Some(d) = t.peek().and_then(|&c| superscript(c)) {
+                e = e * 10 + d as i32;
+                t.next();
+                n += 1;
+            }
+            exponent = sign * e;
+            i += 3 + usize::from(sign < 0) + n;
+        } else if let Some(tail) = rest.strip_prefix('e') {
+            let e: String = tail.chars().take_while(|c| c.is_ascii_digit() || *c == '-').collect();
+            if let Ok(e) = e.parse::<i32>() {
+                exponent = e;
+                i += 1 + e.to_string().len();
+            }
+        }
+        let sign = if negative { -1.0 } else { 1.0 };
+        let value = sign * mantissa * 10f64.powi(exponent);
+        let half = 0.5 * 10f64.powi(exponent - digits);
+        out.push((chars[begin.saturating_sub(usize::from(negative))..i].iter().collect(), value, half));
+    }
+    out
+}
+
+/// `flex3d.md` tells what each experiment shows and quotes our measurements in its "Ours." paragraphs;
+/// `flex3d-results.md` is what `cargo xtask reproduce all` measures. Every decimal number an "Ours."
+/// paragraph quotes (outside the spec's own figures, which it names as the spec's) must be one the
+/// results hold, to the digits it is quoted with: when a run changes what it measures, this fails
+/// until the prose says what the results say.
+#[test]
+fn flex3d_md_quotes_the_generated_results() {
+    let read = |rel: &str| std::fs::read_to_string(Repo::here().root().join(rel)).unwrap();
+    let (prose, results) = (read("docs/reproduction/flex3d.md"), read("docs/reproduction/flex3d-results.md"));
+    let measured: Vec<f64> = decimals(&results).into_iter().map(|(_, v, _)| v).collect();
+    let (mut checked, mut stale) = (0, Vec::new());
+    for paragraph in prose.split("\n\n").filter(|p| p.starts_with("**Ours.**")) {
+        let flat = paragraph.split_whitespace().collect::<Vec<_>>().join(" ");
+        // The spec's figures: a parenthesis that opens with "spec", or a sentence on "The spec's" numbers.
+        let mut ours = String::new();
+        let mut rest = flat.as_str();
+        while let Some(open) = rest.find("(spec") {
+            ours.push_str(&rest[..open]);
+            let after = &rest[open..];
+            let close = after.find(')').map_or(after.len(), |c| c + 1);
+            rest = &after[close..];
+        }
+        ours.push_str(rest);
+        let ours: String =
+            ours.split(". ").filter(|s| !s.starts_with("The spec's")).collect::<Vec<_>>().join(". ");
+        for (token, value, half) in decimals(&ours) {
+            checked += 1;
+            if !measured.iter().any(|m| (m - value).abs() <= half * (1.0 + 1e-9)) {
+                stale.push(format!("{token} (in `{}…`)", flat.chars().take(60).collect::<String>()));
+            }
+        }
+    }
+    assert!(checked >= 10, "only {checked} numbers found in flex3d.md's \"Ours.\" paragraphs");
+    // The searches of E-5 and E-6 are shown as the results' tables: a row whose label the results
+    // also give must be one of the results' rows with that label, cell for cell.
+    let label = |row: &str| row.split('|').nth(1).map(str::trim).unwrap_or_default().to_owned();
+    let mut rows = 0;
+    for row in prose.lines().filter(|l| l.starts_with("| ") && !label(l).is_empty()) {
+        let theirs: Vec<&str> =
+            results.lines().filter(|l| l.starts_with("| ") && label(l) == label(row)).collect();
+        if theirs.is_empty() {
+            continue;
+        }
+        rows += 1;
+        if !theirs.contains(&row) {
+            stale.push(format!("the row `{row}`"));
+        }
+    }
+    assert!(rows >= 10, "only {rows} rows of flex3d.md's tables found in flex3d-results.md");
+    assert!(
+        stale.is_empty(),
+        "flex3d.md quotes numbers that flex3d-results.md does not hold (run `cargo xtask reproduce all` and \
+         bring the prose to what it measures):\n{}",
+        stale.join("\n")
+    );
 }
