@@ -821,7 +821,8 @@ impl OliveiraCloth {
     /// Takes a remeshed cloth (the adaptive drivers of `oliveira::adaptive`): the new mesh and its
     /// particles' state, masses and drag from the new vertex areas, springs from the new edges, bending
     /// elements from the new interior edges, m_min and k^e_max (hence the next Δt), a fresh stepper of
-    /// the same integrator (generalised-α's acceleration zero), and particle P's new index. Time, step count and contact history are kept.
+    /// the same integrator (generalised-α's acceleration zero), and particle P's new index. Time, step count
+    /// and contact history are kept.
     pub(crate) fn replace_mesh(
         &mut self,
         mesh: MaterialMesh,
