@@ -84,6 +84,9 @@ pub struct SizingRemeshing {
     pub proximity_size_m: f64,
     /// Time between passes, s (one frame at 60 Hz by default).
     pub interval_s: f64,
+    /// Whether flips and collapses that would pass the cloth through itself are refused (on by
+    /// default; see `anima_geom::remesh::AdaptiveMesh::guard_crossings`).
+    pub refuse_crossings: bool,
 }
 
 impl SizingRemeshing {
@@ -97,6 +100,7 @@ impl SizingRemeshing {
             proximity_distance_m: 0.02,
             proximity_size_m: 0.0625,
             interval_s: 1.0 / 60.0,
+            refuse_crossings: true,
         }
     }
 }
@@ -141,6 +145,8 @@ pub struct RemeshStats {
     pub failures: u64,
     /// New particles found inside an object and pushed out.
     pub pushed_out: u64,
+    /// Sizing field: flips and collapses refused because they would have made the cloth cross itself.
+    pub crossings_refused: u64,
     /// Wall time spent in remeshing passes and rebuilds, s.
     pub wall_s: f64,
 }
@@ -939,9 +945,11 @@ fn sizing_pass(
         }
     }
     let metrics = face_metrics(mesh, &p.terms, &p.limits, Some(&extra));
-    let report = remesh_to_metric(mesh, &metrics, &MetricRemeshing::new(p.limits));
+    let settings = MetricRemeshing { refuse_crossings: p.refuse_crossings, ..MetricRemeshing::new(p.limits) };
+    let report = remesh_to_metric(mesh, &metrics, &settings);
     stats.refinements += report.splits as u64;
     stats.simplifications += report.collapses as u64;
+    stats.crossings_refused += report.crossings_refused as u64;
     rebuild_from_adaptive(cloth, mesh, None, gravity, stats)
 }
 

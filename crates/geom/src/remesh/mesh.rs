@@ -37,6 +37,8 @@ pub enum OpError {
     Boundary,
     #[error("the new patch does not cover the same rest area as the faces it replaces")]
     AreaMismatch,
+    #[error("the result would pass the cloth through itself")]
+    Crossing,
 }
 
 /// A vertex created by an operation, and where its state came from: X, x and v of `vertex` are
@@ -142,6 +144,8 @@ pub struct AdaptiveMesh {
     pub(crate) log: ChangeLog,
     /// Scratch for fan walks and replacements, kept to avoid allocating per operation.
     pub(crate) scratch: Scratch,
+    /// While on ([`AdaptiveMesh::guard_crossings`]), what flips and collapses check against.
+    pub(crate) crossing_guard: Option<Box<super::crossing_guard::CrossingGuard>>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -242,6 +246,7 @@ impl AdaptiveMesh {
             n_live_faces: nf,
             log: ChangeLog::default(),
             scratch: Scratch::default(),
+            crossing_guard: None,
         };
         for (f, tri) in out.faces.iter().enumerate() {
             for &c in tri {
@@ -643,6 +648,7 @@ impl AdaptiveMesh {
         for i in 0..new.len() as u32 {
             self.log.added_faces.push(base + i);
         }
+        self.guard_new_faces(base..base + new.len() as u32);
         for idx in 0..s.touched.len() {
             let c = s.touched[idx];
             if self.vertex_degree[c as usize] == 0 {

@@ -26,6 +26,7 @@
 //! time stamps, thresholds of Tables 5.1–5.5); the cloth crate decides which edges to refine and calls
 //! these operators.
 
+mod crossing_guard;
 pub mod local_mesh;
 mod mesh;
 mod ops;

@@ -7,6 +7,9 @@
 //! strictly convex quad, a collapse needs every new triangle counter-clockwise (so the new fan tiles
 //! the old star) and removes contour vertices only where the contour is straight, and a patch must
 //! cover the rest area it replaces.
+//!
+//! While [`AdaptiveMesh::guard_crossings`] is on, a flip or collapse that would pass the cloth through
+//! itself in world space is refused too (splits cannot: their triangles tile the old ones).
 
 use glam::{DVec2, DVec3};
 
@@ -101,6 +104,9 @@ impl AdaptiveMesh {
         if !tris.iter().all(|tri| self.proper(*tri)) {
             return Err(OpError::Inverted);
         }
+        if self.would_cross(&[h / 3, t / 3], &tris) {
+            return Err(OpError::Crossing);
+        }
         self.replace_faces(&[h / 3, t / 3], &tris)?;
         self.log.counts.flips += 1;
         Ok((c, d))
@@ -178,6 +184,9 @@ impl AdaptiveMesh {
                 break;
             }
             tris.push(new);
+        }
+        if verdict.is_ok() && self.would_cross(&old, &tris) {
+            verdict = Err(OpError::Crossing);
         }
         if verdict.is_ok() {
             verdict = self.replace_faces(&old, &tris).map(|_| ());

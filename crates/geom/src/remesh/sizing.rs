@@ -233,6 +233,9 @@ pub struct MetricRemeshing {
     pub max_split_rounds: usize,
     /// Sweeps of the flip pass over all edges.
     pub max_flip_sweeps: usize,
+    /// Whether flips and collapses that would pass the cloth through itself are refused
+    /// ([`AdaptiveMesh::guard_crossings`]).
+    pub refuse_crossings: bool,
 }
 
 impl MetricRemeshing {
@@ -245,6 +248,7 @@ impl MetricRemeshing {
             min_collapse_quality: 0.25,
             max_split_rounds: 16,
             max_flip_sweeps: 8,
+            refuse_crossings: true,
         }
     }
 }
@@ -256,6 +260,8 @@ pub struct MetricRemeshReport {
     pub flips: usize,
     pub collapses: usize,
     pub split_rounds: usize,
+    /// Flips and collapses refused because they would have made the cloth cross itself.
+    pub crossings_refused: usize,
 }
 
 /// Per vertex slot, the area-weighted mean of the incident faces' metrics.
@@ -306,12 +312,15 @@ impl Sizer {
 /// Remeshes `mesh` towards the per-face metrics `face_metric` (indexed by face slot, e.g. from
 /// [`face_metrics`]): splits of too-long edges, longest first, each round followed by metric-Delaunay
 /// flips; then collapses of short edges whose result stays within the metric with hysteresis; then
-/// flips again. Edits are logged in the mesh's [`super::ChangeLog`] as usual. Deterministic.
+/// flips again. Edits are logged in the mesh's [`super::ChangeLog`] as usual. Deterministic. With
+/// `settings.refuse_crossings`, no flip or collapse makes the cloth cross itself (module
+/// `crossing_guard`); splits cannot.
 pub fn remesh_to_metric(
     mesh: &mut AdaptiveMesh,
     face_metric: &[Metric],
     settings: &MetricRemeshing,
 ) -> MetricRemeshReport {
+    mesh.guard_crossings(settings.refuse_crossings);
     let mut sizer = Sizer { vm: vertex_metrics(mesh, face_metric) };
     let mut synced = mesh.log.new_vertices.len();
     // Vertices made before this call (already in the log) have their metric from the faces.
@@ -347,6 +356,8 @@ pub fn remesh_to_metric(
     }
     report.collapses += collapse_pass(mesh, &sizer, settings);
     report.flips += flip_pass(mesh, &sizer, settings);
+    report.crossings_refused = mesh.crossing_guard.as_ref().map_or(0, |g| g.refused);
+    mesh.guard_crossings(false);
     report
 }
 
