@@ -9,7 +9,7 @@
 //! report): their commands rewrite them, and a partial run rewrites only its own sections.
 //!
 //! Prose that quotes a generated report is checked against it: the README's benchmark figures and the
-//! measurements `docs/reproduction/flex3d.md` states.
+//! measurements `docs/reproduction/flex3d.md`, `oliveira.md` and `nunes.md` state.
 
 use anima_cloth::flex3d::FrictionMode;
 use anima_lab::repo::Repo;
@@ -107,11 +107,12 @@ fn the_readme_quotes_the_benchmark_reports_as_they_stand() {
     }
 }
 
-/// The decimal numbers of `text` (`61.4`, `−6.6`, `1.0·10⁻⁴`, `1.01e-4`), each with its value and half
-/// the unit of its last printed digit (the rounding a quoted value may carry).
+/// The decimal numbers of `text` (`61.4`, `−6.6`, `1.0·10⁻⁴`, `2.294 × 10⁻⁴`, `1.01e-4`, `19 237.7`), each
+/// with its value and half the unit of its last printed digit (the rounding a quoted value may carry).
 fn decimals(text: &str) -> Vec<(String, f64, f64)> {
     let superscript = |c: char| "⁰¹²³⁴⁵⁶⁷⁸⁹".chars().position(|s| s == c);
     let chars: Vec<char> = text.chars().collect();
+    let digit = |k: usize| k < chars.len() && chars[k].is_ascii_digit();
     let mut out = Vec::new();
     let mut i = 0;
     while i < chars.len() {
@@ -123,23 +124,39 @@ fn decimals(text: &str) -> Vec<(String, f64, f64)> {
         }
         let negative = i > 0 && (chars[i - 1] == '-' || chars[i - 1] == '−');
         let begin = i;
-        while i < chars.len() && chars[i].is_ascii_digit() {
+        while digit(i) {
             i += 1;
         }
+        // Thousands grouped by spaces ("19 237.7"): a lead of at most three digits, groups of three.
+        if i - begin <= 3 {
+            while i + 3 < chars.len()
+                && matches!(chars[i], ' ' | '\u{a0}' | '\u{202f}')
+                && (i + 1..i + 4).all(digit)
+                && !digit(i + 4)
+            {
+                i += 4;
+            }
+        }
         // Only numbers with a fractional part: integers are counts and frame numbers.
-        if !(i + 1 < chars.len() && chars[i] == '.' && chars[i + 1].is_ascii_digit()) {
+        if !(chars.get(i) == Some(&'.') && digit(i + 1)) {
             continue;
         }
         i += 1;
         let fraction = i;
-        while i < chars.len() && chars[i].is_ascii_digit() {
+        while digit(i) {
             i += 1;
         }
         let digits = (i - fraction) as i32;
-        let mantissa: f64 = chars[begin..i].iter().collect::<String>().parse().unwrap();
+        let mantissa: f64 = chars[begin..i]
+            .iter()
+            .filter(|c| c.is_ascii_digit() || **c == '.')
+            .collect::<String>()
+            .parse()
+            .unwrap();
         let mut exponent = 0i32;
-        let rest: String = chars[i..chars.len().min(i + 8)].iter().collect();
-        if let Some(tail) = rest.strip_prefix("·10") {
+        let rest: String = chars[i..chars.len().min(i + 10)].iter().collect();
+        let power = ["·10", " × 10"].into_iter().find_map(|p| rest.strip_prefix(p).map(|t| (p, t)));
+        if let Some((prefix, tail)) = power {
             let mut t = tail.chars().peekable();
             let sign = if t.peek() == Some(&'⁻') {
                 t.next();
@@ -154,8 +171,10 @@ fn decimals(text: &str) -> Vec<(String, f64, f64)> {
                 t.next();
                 n += 1;
             }
-            exponent = sign * e;
-            i += 3 + usize::from(sign < 0) + n;
+            if n > 0 {
+                exponent = sign * e;
+                i += prefix.chars().count() + usize::from(sign < 0) + n;
+            }
         } else if let Some(tail) = rest.strip_prefix('e') {
             let e: String = tail.chars().take_while(|c| c.is_ascii_digit() || *c == '-').collect();
             if let Ok(e) = e.parse::<i32>() {
@@ -169,6 +188,75 @@ fn decimals(text: &str) -> Vec<(String, f64, f64)> {
         out.push((chars[begin.saturating_sub(usize::from(negative))..i].iter().collect(), value, half));
     }
     out
+}
+
+/// The decimals of `quoted` that none of the `measured` values is, to the digits they are quoted with.
+fn unheld(quoted: &str, measured: &[f64]) -> Vec<String> {
+    decimals(quoted)
+        .into_iter()
+        .filter(|(_, value, half)| !measured.iter().any(|m| (m - value).abs() <= half * (1.0 + 1e-9)))
+        .map(|(token, _, _)| token)
+        .collect()
+}
+
+/// `text` without the numbers that name a figure, an equation, a table or a section of the thesis or
+/// the spec (`Fig. 6.7`, `Eqs. 4.16–4.18`, `§8.1.2`), or give a scene's parameter (`β = 0.008`).
+fn without_references(text: &str) -> String {
+    let prefixes = ["Fig. ", "Figs. ", "Eq. ", "Eqs. ", "Table ", "§", "β = "];
+    let (mut out, mut rest) = (String::new(), text);
+    while let Some((at, prefix)) = prefixes.iter().filter_map(|p| rest.find(p).map(|a| (a, *p))).min() {
+        out.push_str(&rest[..at + prefix.len()]);
+        rest = rest[at + prefix.len()..]
+            .trim_start_matches(|c: char| c.is_ascii_digit() || c == '.' || c == '–');
+    }
+    out + rest
+}
+
+/// A hand-written report's quotes of the generated reports it cites: in `doc` (under
+/// `docs/reproduction/`), the text from each span's `from` marker to its `to` marker quotes the
+/// span's generated reports, and every decimal number in it must be one they hold, to the digits it is
+/// quoted with. Left out: the cells under a table header that starts with "thesis" (the thesis's own
+/// figures) and references to figures, equations, tables and sections. At least `at_least` numbers
+/// are checked, so that a moved marker cannot empty the check; `command` regenerates the reports.
+fn assert_quotes_generated(doc: &str, spans: &[(&str, &str, &[&str])], at_least: usize, command: &str) {
+    let read =
+        |name: &str| std::fs::read_to_string(Repo::here().docs(format!("reproduction/{name}"))).unwrap();
+    let prose = read(doc);
+    let (mut checked, mut stale) = (0, Vec::new());
+    for (from, to, generated) in spans {
+        let measured: Vec<f64> =
+            generated.iter().flat_map(|g| decimals(&read(g))).map(|(_, v, _)| v).collect();
+        let start = prose.find(from).unwrap_or_else(|| panic!("{doc} has no `{from}`"));
+        let end = prose[start..].find(to).map(|e| start + e).unwrap_or_else(|| panic!("{doc} has no `{to}`"));
+        let (mut kept, mut thesis) = (Vec::new(), Vec::new());
+        let mut in_table = false;
+        for line in prose[start..end].lines() {
+            if !line.starts_with('|') {
+                in_table = false;
+                kept.push(line.to_owned());
+                continue;
+            }
+            let cells: Vec<&str> = line.split('|').collect();
+            if !in_table {
+                thesis = cells.iter().map(|c| c.trim().starts_with("thesis")).collect();
+                in_table = true;
+            }
+            let ours = cells.iter().enumerate().filter(|(k, _)| !thesis.get(*k).copied().unwrap_or(false));
+            kept.push(ours.map(|(_, c)| *c).collect::<Vec<_>>().join("|"));
+        }
+        let flat = without_references(&kept.join("\n").split_whitespace().collect::<Vec<_>>().join(" "));
+        checked += decimals(&flat).len();
+        for token in unheld(&flat, &measured) {
+            stale.push(format!("{token} (after `{from}`, quoting {generated:?})"));
+        }
+    }
+    assert!(checked >= at_least, "only {checked} numbers found in {doc}'s quotes of the generated reports");
+    assert!(
+        stale.is_empty(),
+        "{doc} quotes numbers that the generated reports it cites do not hold (bring the prose to what \
+         `{command}` writes, or point at the report instead of repeating the number):\n{}",
+        stale.join("\n")
+    );
 }
 
 /// `flex3d.md` tells what each experiment shows and quotes our measurements in its "Ours." paragraphs;
@@ -196,11 +284,9 @@ fn flex3d_md_quotes_the_generated_results() {
         ours.push_str(rest);
         let ours: String =
             ours.split(". ").filter(|s| !s.starts_with("The spec's")).collect::<Vec<_>>().join(". ");
-        for (token, value, half) in decimals(&ours) {
-            checked += 1;
-            if !measured.iter().any(|m| (m - value).abs() <= half * (1.0 + 1e-9)) {
-                stale.push(format!("{token} (in `{}…`)", flat.chars().take(60).collect::<String>()));
-            }
+        checked += decimals(&ours).len();
+        for token in unheld(&ours, &measured) {
+            stale.push(format!("{token} (in `{}…`)", flat.chars().take(60).collect::<String>()));
         }
     }
     assert!(checked >= 10, "only {checked} numbers found in flex3d.md's \"Ours.\" paragraphs");
@@ -225,5 +311,53 @@ fn flex3d_md_quotes_the_generated_results() {
         "flex3d.md quotes numbers that flex3d-results.md does not hold (run `cargo xtask reproduce all` and \
          bring the prose to what it measures):\n{}",
         stale.join("\n")
+    );
+}
+
+/// `oliveira.md` quotes the static drapes' measurements from `oliveira-results.md` (its results
+/// table and the paragraph after it) and the adaptive runs' from `oliveira-adaptive.md` (what the
+/// full-duration runs show). The wall times change with each run of `cargo xtask reproduce oliveira`:
+/// this fails until the prose says what the regenerated report says.
+#[test]
+fn oliveira_md_quotes_the_generated_results() {
+    assert_quotes_generated(
+        "oliveira.md",
+        &[
+            ("## Results (static meshes)", "What the runs show", &["oliveira-results.md"]),
+            ("What the full-duration runs show", "type-3 response", &["oliveira-adaptive.md"]),
+        ],
+        30,
+        "cargo xtask reproduce oliveira [--adaptive]",
+    );
+}
+
+/// `nunes.md` quotes, from "Results beside the thesis" to its figures, what the generated Nunes
+/// reports measure: the results beside the thesis and their reading from `nunes-results.md` and the
+/// reports that reading cites, the optimisers from `nunes-optimisers.md` (and `walk-robust.ron` from
+/// `nunes-simbicon.md`), the SIMBICON sections from `nunes-simbicon.md`.
+#[test]
+fn nunes_md_quotes_the_generated_results() {
+    let reading: &[&str] = &[
+        "nunes-results.md",
+        "nunes-walk-faithful.md",
+        "nunes-optimisers.md",
+        "nunes-robustness.md",
+        "nunes-protocol.md",
+        "nunes-slopes.md",
+        "nunes-speeds.md",
+    ];
+    assert_quotes_generated(
+        "nunes.md",
+        &[
+            ("## Results beside the thesis", "## Beyond the thesis: optimisers", reading),
+            (
+                "## Beyond the thesis: optimisers",
+                "## SIMBICON-style",
+                &["nunes-optimisers.md", "nunes-simbicon.md"],
+            ),
+            ("## SIMBICON-style", "## Figures", &["nunes-simbicon.md"]),
+        ],
+        60,
+        "cargo xtask reproduce nunes-…",
     );
 }
