@@ -12,8 +12,10 @@
 //! So while the guard is on, a flip or collapse is refused when its new triangles would cross (an edge
 //! through a triangle, [`segment_crosses_triangle`]) the live triangles outside the operation in more
 //! pairs than the triangles they replace did. The live triangles that can meet the new ones are found in a
-//! grid of the faces' world boxes (cells of the mean edge length), to which every face an operation
-//! makes is added.
+//! grid of the faces' world boxes (cells of the median edge length), to which every face an operation
+//! makes is added. A face whose box spans more than [`MAX_CELLS`] cells (a mesh torn apart by a run
+//! that left its bounds) is kept in a list that every query reads instead, and a query whose box spans
+//! more reads every live face, so the guard's memory and work stay bounded on any mesh.
 
 use std::collections::HashMap;
 
@@ -22,27 +24,47 @@ use glam::DVec3;
 use super::mesh::AdaptiveMesh;
 use crate::self_contact::segment_crosses_triangle;
 
+/// The most grid cells a face is entered in, or a query reads.
+pub(crate) const MAX_CELLS: usize = 512;
+
 /// The faces of a mesh in cubic cells of their world boxes.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct CrossingGuard {
     cell: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Faces whose boxes span more than [`MAX_CELLS`] cells.
+    large: Vec<u32>,
     /// Operations refused since the guard was built.
     pub(crate) refused: usize,
     faces: Vec<u32>,
 }
 
 impl CrossingGuard {
-    fn keys(&self, lo: DVec3, hi: DVec3) -> impl Iterator<Item = [i64; 3]> + use<> {
-        let (a, b) = ((lo / self.cell).floor().as_i64vec3(), (hi / self.cell).floor().as_i64vec3());
-        (a.x..=b.x).flat_map(move |i| (a.y..=b.y).flat_map(move |j| (a.z..=b.z).map(move |k| [i, j, k])))
+    /// The cells of a box, or `None` when they are more than [`MAX_CELLS`].
+    fn keys(&self, lo: DVec3, hi: DVec3) -> Option<impl Iterator<Item = [i64; 3]> + use<>> {
+        let (a, b) = ((lo / self.cell).floor(), (hi / self.cell).floor());
+        let span = (b - a + DVec3::ONE).max(DVec3::ONE);
+        let cells = span.x * span.y * span.z;
+        // Not finite (NaN positions) counts as too many.
+        if cells.is_nan() || cells > MAX_CELLS as f64 {
+            return None;
+        }
+        let (a, b) = (a.as_i64vec3(), b.as_i64vec3());
+        Some(
+            (a.x..=b.x).flat_map(move |i| (a.y..=b.y).flat_map(move |j| (a.z..=b.z).map(move |k| [i, j, k]))),
+        )
     }
 
     /// Adds face `f` with corners `p`.
     pub(crate) fn insert(&mut self, f: u32, p: [DVec3; 3]) {
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
-        for key in self.keys(lo, hi) {
-            self.cells.entry(key).or_default().push(f);
+        match self.keys(lo, hi) {
+            Some(keys) => {
+                for key in keys {
+                    self.cells.entry(key).or_default().push(f);
+                }
+            }
+            None => self.large.push(f),
         }
     }
 }
@@ -56,14 +78,22 @@ impl AdaptiveMesh {
             self.crossing_guard = None;
             return;
         }
-        let (mut sum, mut count) = (0.0, 0usize);
-        for f in self.live_faces() {
-            let [a, b, c] = self.corners(f);
-            sum += a.distance(b) + b.distance(c) + c.distance(a);
-            count += 3;
-        }
+        // Cells of the median edge: torn faces (a run that left its bounds) do not make them large.
+        let mut lengths: Vec<f64> = self
+            .live_faces()
+            .flat_map(|f| {
+                let [a, b, c] = self.corners(f);
+                [a.distance(b), b.distance(c), c.distance(a)]
+            })
+            .collect();
+        let cell = if lengths.is_empty() {
+            1.0
+        } else {
+            let mid = lengths.len() / 2;
+            *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
         let mut guard =
-            CrossingGuard { cell: (sum / count.max(1) as f64).max(1e-9), ..CrossingGuard::default() };
+            CrossingGuard { cell: if cell > 1e-9 { cell } else { 1e-9 }, ..CrossingGuard::default() };
         for f in self.live_faces() {
             guard.insert(f, self.corners(f));
         }
@@ -98,10 +128,17 @@ impl AdaptiveMesh {
             }
         }
         g.faces.clear();
-        for key in g.keys(lo, hi) {
-            if let Some(fs) = g.cells.get(&key) {
-                g.faces.extend(fs.iter().filter(|&&f| self.is_face_alive(f) && !old.contains(&f)));
+        let outside = |f: &u32| self.is_face_alive(*f) && !old.contains(f);
+        match g.keys(lo, hi) {
+            Some(keys) => {
+                for key in keys {
+                    if let Some(fs) = g.cells.get(&key) {
+                        g.faces.extend(fs.iter().filter(|f| outside(f)));
+                    }
+                }
+                g.faces.extend(g.large.iter().filter(|f| outside(f)));
             }
+            None => g.faces.extend(self.live_faces().filter(|f| outside(f))),
         }
         g.faces.sort_unstable();
         g.faces.dedup();
@@ -209,5 +246,21 @@ mod tests {
         guarded.split_edge(4, 5, &guards).unwrap();
         assert_eq!(guarded.flip_edge(0, 2, &guards), Err(OpError::Crossing));
         assert_eq!(crossings(&guarded), 0);
+    }
+
+    #[test]
+    fn a_torn_mesh_is_guarded_within_bounded_memory() {
+        // The small triangle blown up to kilometres (as after a run that left its bounds): it goes in the
+        // list of large faces, not in millions of cells, and still refuses the flip through it.
+        let guards = OpGuards::validity_only();
+        let mut mesh = folded_square_beside(DVec3::new(0.5, 0.5, 1.0));
+        for p in &mut mesh.positions_mut()[4..] {
+            *p = DVec3::new(0.5, 0.5, 1.0) + (*p - DVec3::new(0.5, 0.5, 1.0)) * 1e4;
+        }
+        mesh.guard_crossings(true);
+        let g = mesh.crossing_guard.as_ref().unwrap();
+        assert_eq!(g.large, vec![2]);
+        assert!(g.cells.values().map(Vec::len).sum::<usize>() <= 2 * MAX_CELLS);
+        assert_eq!(mesh.flip_edge(0, 2, &guards), Err(OpError::Crossing));
     }
 }
