@@ -142,6 +142,13 @@ impl AdaptiveMesh {
         }
         g.faces.sort_unstable();
         g.faces.dedup();
+        // Only faces whose boxes meet the new triangles' can cross them (or be crossed by the old ones
+        // within that box).
+        g.faces.retain(|&f| {
+            let q = self.corners(f);
+            let (flo, fhi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
+            !(flo.cmpgt(hi).any() || fhi.cmplt(lo).any())
+        });
         let crosses = |edge_of: [u32; 3], through: [u32; 3]| {
             let p = edge_of.map(|i| self.x[i as usize]);
             let q = through.map(|i| self.x[i as usize]);
@@ -159,10 +166,7 @@ impl AdaptiveMesh {
                     .iter()
                     .filter(|&&f| {
                         let tri = self.faces[f as usize];
-                        let q = self.corners(f);
-                        let (flo, fhi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
-                        let apart = flo.cmpgt(hi).any() || fhi.cmplt(lo).any();
-                        !apart && (crosses(n, tri) || crosses(tri, n))
+                        crosses(n, tri) || crosses(tri, n)
                     })
                     .count()
             })
