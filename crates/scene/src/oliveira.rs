@@ -25,8 +25,23 @@ pub enum Remesher {
     /// Simnett's 1-to-4 subdivision with Table 5.5's parameters, a pass every `interval_s`.
     Subdivision { interval_s: f64 },
     /// A sizing-field remesher for a 1 m cloth (edges between `min_edge_m` and 25 cm), a pass every
-    /// `interval_s`.
-    SizingField { min_edge_m: f64, interval_s: f64 },
+    /// `interval_s`. `refuse_crossings` (true when left out) keeps the flips and collapses that would pass
+    /// the cloth through itself from happening ([`SizingRemeshing::refuse_crossings`]); false lets them
+    /// happen, to see what the guard prevents.
+    SizingField {
+        min_edge_m: f64,
+        interval_s: f64,
+        #[serde(default = "refuse_crossings_by_default", skip_serializing_if = "is_true")]
+        refuse_crossings: bool,
+    },
+}
+
+fn refuse_crossings_by_default() -> bool {
+    true
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 impl Remesher {
@@ -57,12 +72,13 @@ impl Remesher {
                 interval_s: interval(interval_s)?,
                 ..SubdivisionRemeshing::test_3()
             }),
-            Remesher::SizingField { min_edge_m, interval_s } => {
+            Remesher::SizingField { min_edge_m, interval_s, refuse_crossings } => {
                 if !(min_edge_m > 0.0 && min_edge_m < 0.25) {
                     return Err(format!("expected a shortest edge between 0 and 0.25 m, found {min_edge_m}"));
                 }
                 AdaptiveMethod::SizingField(SizingRemeshing {
                     interval_s: interval(interval_s)?,
+                    refuse_crossings,
                     ..SizingRemeshing::for_cloth(min_edge_m)
                 })
             }
@@ -209,8 +225,29 @@ mod tests {
         assert_eq!(p.min_rest_length, OliveiraRemeshing::test_1().min_rest_length);
         let bad = Remesher::Oliveira { test: 4, short_edge: ShortEdgeRule::MinLength, interval_s: 0.0 };
         assert!(bad.method().unwrap_err().contains("test 1, 2 or 3"));
-        assert!(Remesher::SizingField { min_edge_m: 0.0, interval_s: 0.1 }.method().is_err());
+        assert!(
+            Remesher::SizingField { min_edge_m: 0.0, interval_s: 0.1, refuse_crossings: true }
+                .method()
+                .is_err()
+        );
         assert!(Remesher::Subdivision { interval_s: -1.0 }.method().is_err());
+    }
+
+    #[test]
+    fn a_sizing_field_scene_refuses_crossings_unless_it_says_not_to() {
+        let refuses = |remesher: &str| {
+            let text = format!("AdaptiveOliveiraScene(drape: {MINIMAL}, remesher: {remesher})");
+            let scene = adaptive_from_ron_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+            let AdaptiveMethod::SizingField(p) = scene.remesher.method().unwrap() else {
+                panic!("sizing field")
+            };
+            let again = adaptive_from_ron_str(&adaptive_to_ron_string(&scene)).unwrap();
+            assert_eq!(again, scene, "round trip");
+            p.refuse_crossings
+        };
+        assert!(refuses("SizingField(min_edge_m: 0.03, interval_s: 0.01)"));
+        assert!(refuses("SizingField(min_edge_m: 0.03, interval_s: 0.01, refuse_crossings: true)"));
+        assert!(!refuses("SizingField(min_edge_m: 0.03, interval_s: 0.01, refuse_crossings: false)"));
     }
 
     #[test]

@@ -213,11 +213,17 @@ fn build(
         }),
         Kind::OneToFour => Some(Remesher::Subdivision { interval_s: REMESH_INTERVAL_S }),
         // With backward Euler: edges no shorter than the reference's 6.25 cm, a pass every 1/240 s.
-        Kind::Sizing if implicit.is_some() => {
-            Some(Remesher::SizingField { min_edge_m: 0.0625, interval_s: 1.0 / 240.0 })
+        Kind::Sizing if implicit.is_some() => Some(Remesher::SizingField {
+            min_edge_m: 0.0625,
+            interval_s: 1.0 / 240.0,
+            refuse_crossings: true,
+        }),
+        Kind::Sizing => {
+            Some(Remesher::SizingField { min_edge_m: 0.03, interval_s: 1.0 / 60.0, refuse_crossings: true })
         }
-        Kind::Sizing => Some(Remesher::SizingField { min_edge_m: 0.03, interval_s: 1.0 / 60.0 }),
-        Kind::SizingTo(min_edge_m) => Some(Remesher::SizingField { min_edge_m, interval_s: 1.0 / 240.0 }),
+        Kind::SizingTo(min_edge_m) => {
+            Some(Remesher::SizingField { min_edge_m, interval_s: 1.0 / 240.0, refuse_crossings: true })
+        }
     };
     let method = match remesher {
         Some(r) => r.method().map_err(anyhow::Error::msg)?,
