@@ -49,6 +49,31 @@ const SMOOTHING: f64 = 0.7;
 /// 4 than with 3. (Measured earlier, before the spring-form products and the line search's end
 /// rule: radius 1 needed 7.9 iterations and 6 ms per factorisation, radius 2 10.8 and 2.5 ms, radius
 /// 3 13.6 and 1.7 ms.)
+///
+/// On a graded mesh hops are a poor measure, and none of the aggregations tried there keeps CG's count
+/// as low as on a uniform mesh without a coarse level nearly as large as the fine one. Measured on the
+/// Bunny drape at 1/60 s (contact in the solve, modern self-collision) started at 17² and remeshed after
+/// every step by the sizing field down to the 65² drape's spacing (about 2 200 particles by 0.7 s), CG
+/// iterations per solve over the steps to 0.75 s, against the uniform 65² drape (4 225 particles) at
+/// the same time; one run each, throwaway switches, and the remeshed runs differ from each other
+/// chaotically, so the counts are indicative:
+///
+/// | aggregation | remeshed: aggregates (largest) | CG / solve | uniform: aggregates | CG / solve |
+/// |---|---|---|---|---|
+/// | radius 4 (this) | 39–41 (233) | 26.1 | 100 (59) | 3.6 |
+/// | radius 3 | 72 (114) | 31.7 | – | – |
+/// | radius 2 | 127 (51) | 12.9 | – | – |
+/// | radius 1 | 373 (19) | 2.6 | – | – |
+/// | radius 4, growth within 4 cm of the seed | 340 (20) | 5.0 | 484 (9) | 2.2 |
+/// | radius 4, growth within 7 cm of the seed | 128 (80) | 15.1 | 180 (27) | 2.5 |
+/// | radius 4, 2, 3, seeds whose neighbours are all free, leftovers joined to a neighbour | 25, 62, 36 | 28.3, 14.5, 26.8 | – | – |
+/// | radius 4, strong pairs only, θ = 0.02, 0.05, 0.1 | 80–96 | 19.2, 28.3, 28.4 | 169–193 | 3.1, 3.1, 2.6 |
+///
+/// Strength of connection there was ‖B_e‖ ≥ θ √(d_i d_j), d the spring-form diagonal's norm; about half
+/// the pairs were weak on either mesh. The remeshed system is not stiffer per particle (d_i/m_i median
+/// 3 231, largest 15 307, against 8 009 and 26 835 on the uniform mesh). Only radius 1 matched the
+/// uniform count, with a coarse level of 2 238 unknowns for 6 800 fine ones, and its step was no cheaper
+/// (213 against 188 ms a step, one run each on a loaded machine). Issue #42 keeps the question.
 pub(crate) const RADIUS: usize = 4;
 
 /// Block-Jacobi sweeps before and after the coarse correction. Two sweeps cut the CG iterations by a
