@@ -67,6 +67,7 @@ const SMOOTHING: f64 = 0.7;
 /// | radius 4, growth within 4 cm of the seed | 340 (20) | 5.0 | 484 (9) | 2.2 |
 /// | radius 4, growth within 7 cm of the seed | 128 (80) | 15.1 | 180 (27) | 2.5 |
 /// | radius 4, 2, 3, seeds whose neighbours are all free, leftovers joined to a neighbour | 25, 62, 36 | 28.3, 14.5, 26.8 | – | – |
+/// | radius 4, at most 60, 40, 25 particles an aggregate | 58, 66, 118–123 | 24.9, 18.3, 20.2 | – | – |
 /// | radius 4, strong pairs only, θ = 0.02, 0.05, 0.1 | 80–96 | 19.2, 28.3, 28.4 | 169–193 | 3.1, 3.1, 2.6 |
 ///
 /// Strength of connection there was ‖B_e‖ ≥ θ √(d_i d_j), d the spring-form diagonal's norm; about half
