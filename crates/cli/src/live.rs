@@ -15,8 +15,8 @@ pub struct ViewLink {
 }
 
 impl LiveLink for ViewLink {
-    fn tell(&mut self, json: String) {
-        self.frames.tell(json);
+    fn tell(&mut self, json: String) -> bool {
+        self.frames.tell(json)
     }
 
     fn frame(&mut self, index: usize, time_s: f64, positions: Vec<f32>) {

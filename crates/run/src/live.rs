@@ -14,8 +14,11 @@
 //! [`crate::interrupt`] ten times a second, so Ctrl-C still ends the run.
 //!
 //! What the page draws is sent as a JSON note before the first frame (`{"mesh":…}`: triangles over the
-//! frame's points, and colours for figures), again whenever a remesher changes the triangles; every
-//! frame then carries only the points (x, y, z as `f32`, metres). Figures are drawn as their bodies'
+//! frame's points, their count, and colours for figures), again whenever a remesher changes the
+//! triangles, and again with the next frame while a full queue keeps dropping it; every frame then
+//! carries only the points (x, y, z as `f32`, metres). The server sends notes before frames, so frames
+//! of the old mesh still queued can reach the page after a new mesh: the page draws only frames with
+//! as many points as its mesh has. Figures are drawn as their bodies'
 //! boxes (four corners, two triangles) and balls (an octagon) in the plane z = 0.
 //!
 //! The slider range of a parameter: the interval the controller file gives it (the optimisers'), else
@@ -48,8 +51,9 @@ pub enum LiveCommand {
 /// The two directions between a run and whoever watches it. Implemented by the `anima` command over
 /// `anima-view`'s bounded channels; every call must return promptly, never waiting on a slow page.
 pub trait LiveLink: Send {
-    /// A JSON note for the page (what to draw, a parameter change, a warning).
-    fn tell(&mut self, json: String);
+    /// A JSON note for the page (what to draw, a parameter change, a warning); returns whether it was
+    /// queued (a full queue drops it, and a mesh note is then sent again with the next frame).
+    fn tell(&mut self, json: String) -> bool;
     /// A frame: its number, time (s) and points (x, y, z, m). Dropped rather than waited for.
     fn frame(&mut self, index: usize, time_s: f64, positions: Vec<f32>);
     /// The next command, waiting up to `wait` for one (`None`: not at all).
@@ -264,11 +268,15 @@ impl LiveRun {
         triangles: &[[u32; 3]],
     ) -> Result<(), crate::interrupt::Interrupted> {
         if !self.mesh_sent || self.triangles != triangles {
-            self.triangles.clear();
-            self.triangles.extend_from_slice(triangles);
-            self.mesh_sent = true;
-            let note = serde_json::json!({ "mesh": { "kind": "cloth", "triangles": triangles } });
-            self.live.link().tell(note.to_string());
+            let note =
+                serde_json::json!({ "mesh": { "kind": "cloth", "triangles": triangles, "points": x.len() } });
+            // Taken as sent only once it was queued: a dropped mesh would leave the page drawing the
+            // new points on the old triangles, or nothing, for the rest of the run.
+            if self.live.link().tell(note.to_string()) {
+                self.triangles.clear();
+                self.triangles.extend_from_slice(triangles);
+                self.mesh_sent = true;
+            }
         }
         let positions = x.iter().flat_map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
         self.frame(index, time_s, positions);
@@ -323,10 +331,10 @@ impl LiveRun {
             }
         }
         if !self.mesh_sent {
-            self.mesh_sent = true;
             // One colour a body, in the order of the bodies' points.
-            let note = serde_json::json!({ "mesh": { "kind": "figures", "triangles": triangles, "colours": colours } });
-            self.live.link().tell(note.to_string());
+            let points = positions.len() / 3;
+            let note = serde_json::json!({ "mesh": { "kind": "figures", "triangles": triangles, "colours": colours, "points": points } });
+            self.mesh_sent = self.live.link().tell(note.to_string());
         }
         self.frame(index, world.time(), positions);
         Ok(())
@@ -353,8 +361,8 @@ mod tests {
     }
 
     impl LiveLink for ChannelLink {
-        fn tell(&mut self, json: String) {
-            let _ = self.notes.send(json);
+        fn tell(&mut self, json: String) -> bool {
+            self.notes.send(json).is_ok()
         }
         fn frame(&mut self, index: usize, _: f64, _: Vec<f32>) {
             let _ = self.frames.send(index);
@@ -365,6 +373,61 @@ mod tests {
                 None => self.commands.try_recv().ok(),
             }
         }
+    }
+
+    /// A link whose note queue is full for the first `full` notes.
+    struct FullAtFirst {
+        full: usize,
+        link: ChannelLink,
+    }
+
+    impl LiveLink for FullAtFirst {
+        fn tell(&mut self, json: String) -> bool {
+            if self.full > 0 {
+                self.full -= 1;
+                return false;
+            }
+            self.link.tell(json)
+        }
+        fn frame(&mut self, index: usize, time_s: f64, positions: Vec<f32>) {
+            self.link.frame(index, time_s, positions);
+        }
+        fn command(&mut self, wait: Option<Duration>) -> Option<LiveCommand> {
+            self.link.command(wait)
+        }
+    }
+
+    /// A mesh note the queue dropped is sent again with the next frame (else the page would draw a
+    /// remeshed cloth's points on the old triangles, or nothing, for the rest of the run), and a mesh
+    /// says how many points its frames carry, so that the page can pass over frames of an older mesh.
+    #[test]
+    fn a_dropped_mesh_is_sent_again_and_says_its_point_count() {
+        let (notes_tx, notes) = mpsc::channel();
+        let (frames_tx, frames) = mpsc::channel();
+        let (_commands, commands_rx) = mpsc::channel();
+        let link = ChannelLink { notes: notes_tx, frames: frames_tx, commands: commands_rx };
+        let live = Live::new(FullAtFirst { full: 2, link }, Vec::new());
+        let mut run = LiveRun::new(&live);
+        let x = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::ONE];
+        let (one, two) = ([[0, 1, 2]], [[0, 1, 2], [1, 3, 2]]);
+        let mut send = |k: usize, triangles: &[[u32; 3]]| {
+            run.cloth_frame(k, k as f64, &x, triangles).unwrap();
+            notes
+                .try_iter()
+                .map(|n| serde_json::from_str::<serde_json::Value>(&n).unwrap())
+                .collect::<Vec<_>>()
+        };
+        assert!(send(0, &one).is_empty(), "the first note was dropped");
+        assert!(send(1, &one).is_empty(), "and the second");
+        let sent = send(2, &one);
+        assert_eq!(sent.len(), 1, "sent again until queued");
+        assert_eq!(sent[0]["mesh"]["triangles"], serde_json::json!(one));
+        assert_eq!(sent[0]["mesh"]["points"], 4);
+        assert!(send(3, &one).is_empty(), "not again once the page has it");
+        let remeshed = send(4, &two);
+        assert_eq!(remeshed.len(), 1);
+        assert_eq!(remeshed[0]["mesh"]["triangles"], serde_json::json!(two));
+        assert_eq!(frames.try_iter().collect::<Vec<_>>(), vec![0, 1, 2, 3, 4], "every frame offered");
     }
 
     fn info(kind: ParamKind, range: Option<(f64, f64)>) -> ParamInfo {

@@ -22,6 +22,9 @@ const status = document.getElementById('status');
 const log = document.getElementById('log');
 const label = document.getElementById('label');
 let mesh = null;
+// The points the mesh's triangles are over (null: a run that does not say). A remesh sends a new mesh
+// ahead of frames of the old one still queued; those are not drawn on it.
+let meshPoints = null;
 let framed = false;
 let lastFrame = -1;
 // What the tests read back (crates/cli/tests/viewer.rs).
@@ -63,6 +66,7 @@ function setMesh(m) {
   } else {
     material = new THREE.MeshStandardMaterial({ color: 0x6688bb, side: THREE.DoubleSide, flatShading: true });
   }
+  meshPoints = Number.isInteger(m.points) ? m.points : null;
   mesh = new THREE.Mesh(g, material);
   mesh.frustumCulled = false;
   scene.add(mesh);
@@ -74,6 +78,7 @@ function showFrame(bytes) {
   const index = dv.getUint32(0, true), time = dv.getFloat64(4, true);
   const points = new Float32Array(bytes.slice(12));
   if (!mesh) return;
+  if (meshPoints !== null && points.length !== 3 * meshPoints) return;
   mesh.geometry.setAttribute('position', new THREE.BufferAttribute(points, 3));
   mesh.geometry.computeVertexNormals();
   mesh.geometry.computeBoundingSphere();
