@@ -186,6 +186,23 @@ fn the_optimised_thrower_puts_the_ball_through_the_hoop() {
 }
 
 #[test]
+fn the_overhand_thrower_scores_under_the_literal_fitness() {
+    // assets/controllers/throw-overhand.ron: the best overhand throw through the hoop that the
+    // thesis's search on the literal Eq. 6.1 found (`cargo xtask reproduce nunes-throw`, issue #39).
+    let c = nunes::controller("throw-overhand").unwrap();
+    let (out, release) = nunes::report::throw_released(c).unwrap();
+    assert!(out.scored && !out.fell, "{out:?}");
+    // Overhand: the ball turns clockwise about the thorax over the release step (thrower facing +x),
+    // flung by a moving arm (more than 0.1 rad in that step), not let go by an arm at rest.
+    let release = release.expect("the ball is released");
+    assert_eq!(release.style(), "overhand", "{release:?}");
+    assert!(release.turn < -0.1, "{release:?}");
+    // Better than the unoptimised throw under the literal Eq. 6.1 it was searched with.
+    let before = nunes::throw(nunes::controller("throw").unwrap(), &nunes::BASKET, 2000, |_| ()).unwrap();
+    assert!(out.fitness() > before.fitness() + 2.0, "{out:?} {before:?}");
+}
+
+#[test]
 fn the_committed_backflip_turns_over_and_lands_standing() {
     let c = nunes::controller("backflip").unwrap();
     // 30 s: the landing comes at about iteration 245, so both humanoids stand for 17 s after it.

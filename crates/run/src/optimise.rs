@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anima_control::optimise::{
     Annealing, AnnealingConfig, Cmaes, CmaesConfig, GreedySearch, Objective, Optimiser, RandomSearch, RunLog,
-    resume, run,
+    Space, resume, run,
 };
 use anima_control::{Controller, ParamId};
 use anima_scene::optimisation::{LoadedOptimisation, ObjectiveSpec, OptimiserSpec};
@@ -41,8 +41,21 @@ pub fn fitness(objective: &ObjectiveSpec, controller: &Controller, ids: &[ParamI
 
 /// The spec's optimiser over the selected parameters, started from the controller's values.
 pub fn optimiser(loaded: &LoadedOptimisation, ids: &[ParamId]) -> Result<Box<dyn Optimiser + Send>> {
+    optimiser_in(loaded, ids, loaded.controller.space(ids))
+}
+
+/// [`optimiser`] over `space` (one dimension per parameter of `ids`) instead of the controller's
+/// admissible intervals: a search kept in a region of them.
+pub fn optimiser_in(
+    loaded: &LoadedOptimisation,
+    ids: &[ParamId],
+    space: Space,
+) -> Result<Box<dyn Optimiser + Send>> {
     let c = &loaded.controller;
-    let (space, x0, seed) = (c.space(ids), c.values_of(ids), loaded.spec.seed);
+    if space.len() != ids.len() {
+        bail!("the search space has {} dimensions for {} free parameters", space.len(), ids.len());
+    }
+    let (x0, seed) = (c.values_of(ids), loaded.spec.seed);
     for stage in match &loaded.spec.optimiser {
         OptimiserSpec::Greedy { stages } => stages.as_slice(),
         _ => &[],

@@ -16,7 +16,7 @@ use anima_scene::optimisation::{LoadedOptimisation, OptimisationSpec, OptimiserS
 use crate::optimise::Resumed;
 use crate::report::Document;
 use anima_body::Actuation;
-use anima_control::optimise::{Objective, Optimiser, RunLog};
+use anima_control::optimise::{GroupChoice, Modifier, Objective, Optimiser, RunLog, Space};
 use anima_control::{Controller, ParamId};
 use anyhow::{Context, Result, bail};
 
@@ -592,6 +592,7 @@ fn throw(repo: &Repo) -> Result<String> {
         labels.iter().zip(&best.x).map(|(l, v)| format!("{l} = {v:.3}")).collect::<Vec<_>>().join(", ")
     );
     s.push_str(&throw_global(repo, &loaded, &best.x)?);
+    s.push_str(&throw_readings(repo, &loaded)?);
     Ok(s)
 }
 
@@ -600,16 +601,19 @@ fn throw(repo: &Repo) -> Result<String> {
 /// (counter-clockwise for a thrower facing +x) when the hand comes forward from below, negative when it
 /// comes forward over the top.
 #[derive(Debug, Clone, Copy)]
-struct Release {
-    ball: f64,
-    thorax: f64,
-    swing: f64,
+pub struct Release {
+    pub ball: f64,
+    pub thorax: f64,
+    pub swing: f64,
+    /// The same turn as an angle (rad, small-angle): `swing` over the squared distance from the
+    /// thorax. Near zero when the arm has stopped before the hand lets go.
+    pub turn: f64,
 }
 
 impl Release {
     /// Underhand when the arm swings forward from below (counter-clockwise), overhand when it comes
     /// over the top (clockwise), whatever the height it lets go at.
-    fn style(&self) -> &'static str {
+    pub fn style(&self) -> &'static str {
         if self.swing > 0.0 { "underhand" } else { "overhand" }
     }
 }
@@ -620,13 +624,19 @@ fn throw_with_release(
     ids: &[ParamId],
     x: &[f64],
 ) -> Result<(nunes::ThrowOutcome, Option<Release>)> {
+    throw_released(with_values(base, ids, x))
+}
+
+/// The throw of the throwing controller `c` (2000 iterations at most), and how it released the ball
+/// (`None` when it never did).
+pub fn throw_released(c: Controller) -> Result<(nunes::ThrowOutcome, Option<Release>)> {
     let sk = anima_body::BuiltinSkeleton::Thrower.load();
     let thorax = sk.body_index("thorax").context("the thrower has a thorax")?;
     let ball = sk.body_index("ball").context("the thrower has a ball")?;
     let mut release = None;
     let mut poses = Vec::new();
     let mut last: Option<([f64; 2], [f64; 2])> = None;
-    let out = nunes::throw(with_values(base, ids, x), &nunes::BASKET, 2000, |c| {
+    let out = nunes::throw(c, &nunes::BASKET, 2000, |c| {
         if release.is_some() || c.env.world.body_poses(0, &mut poses).is_err() {
             return;
         }
@@ -635,11 +645,34 @@ fn throw_with_release(
             let (b0, t0) = last.unwrap_or((b, t));
             let r = [b[0] - t[0], b[1] - t[1]];
             let d = [(b[0] - b0[0]) - (t[0] - t0[0]), (b[1] - b0[1]) - (t[1] - t0[1])];
-            release = Some(Release { ball: b[1], thorax: t[1], swing: r[0] * d[1] - r[1] * d[0] });
+            let swing = r[0] * d[1] - r[1] * d[0];
+            let turn = swing / (r[0] * r[0] + r[1] * r[1]);
+            release = Some(Release { ball: b[1], thorax: t[1], swing, turn });
         }
         last = Some((b, t));
     })?;
     Ok((out, release))
+}
+
+/// Runs `loaded`'s search over `ids` from the controller's values, logged under the spec's name, in
+/// `space` (the controller's admissible intervals when `None`): the winner and how many
+/// modifications were accepted after the starting point.
+fn logged_search(
+    repo: &Repo,
+    loaded: &LoadedOptimisation,
+    ids: &[ParamId],
+    space: Option<&Space>,
+) -> Result<(Vec<f64>, usize)> {
+    let base = &loaded.controller;
+    let build = || match space {
+        Some(space) => crate::optimise::optimiser_in(loaded, ids, space.clone()),
+        None => crate::optimise::optimiser(loaded, ids),
+    };
+    let objective = |x: &[f64]| crate::optimise::fitness(&loaded.spec.objective, base, ids, x);
+    let log = optimise_logged(repo, &loaded.spec.name, build, &objective, loaded.spec.evaluations)?;
+    let best = log.best().context("empty log")?.x.clone();
+    let accepted = log.evaluations.iter().filter(|e| e.accepted && e.generation > 0).count();
+    Ok((best, accepted))
 }
 
 /// The thesis's first attempt (spec §8.3.2): every parameter drawn over its whole interval at every
@@ -664,12 +697,7 @@ fn throw_global(repo: &Repo, local: &LoadedOptimisation, local_best: &[f64]) -> 
     let mut winners = Vec::new();
     for spec in [spec, literal] {
         let loaded = LoadedOptimisation { spec, controller: base.clone() };
-        let build = || crate::optimise::optimiser(&loaded, &ids);
-        let objective = |x: &[f64]| crate::optimise::fitness(&loaded.spec.objective, base, &ids, x);
-        let log = optimise_logged(repo, &loaded.spec.name, build, &objective, loaded.spec.evaluations)?;
-        let best = log.best().context("empty log")?.x.clone();
-        let accepted = log.evaluations.iter().filter(|e| e.accepted && e.generation > 0).count();
-        winners.push((best, accepted));
+        winners.push(logged_search(repo, &loaded, &ids, None)?);
     }
     let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
     let x0 = base.values_of(&ids);
@@ -724,6 +752,213 @@ fn throw_global(repo: &Repo, local: &LoadedOptimisation, local_best: &[f64]) -> 
          (literal); the local search {}.",
         styles[2], styles[3], styles[1]
     );
+    Ok(s)
+}
+
+/// Seeds of the throw searches run under several readings (the thesis reports none, spec §9).
+pub const THROW_SEEDS: [u64; 6] = [SEED, SEED + 1, SEED + 2, SEED + 3, SEED + 4, SEED + 5];
+
+/// One reading of the thesis's throw search (spec §8.3.2): its fitness, how it picks the group to
+/// change, and where it starts and searches.
+struct ThrowReading {
+    name: &'static str,
+    /// The run's log name for seed [`SEED`]; other seeds append `-<seed>`.
+    run: &'static str,
+    /// Eq. 6.1 with the height cap [RECON] (`false`: the literal Eq. 6.1).
+    capped: bool,
+    choice: GroupChoice,
+    /// Starting values of (s1, e1, s2, e2, τ2); `throw.ron`'s when `None`.
+    start: Option<[f64; 5]>,
+    /// Admissible intervals of (s1, e1, s2, e2, τ2) in place of `throw.ron`'s; theirs when `None`.
+    region: Option<[(f64, f64); 5]>,
+}
+
+/// An overhand start: E1 holds the ball above and behind the head (the shoulder at the top of its
+/// interval, the elbow at the thesis's initial 2.0 rad), E2 brings the arm down to the thesis's initial
+/// 1.5 rad with the elbow straight, released after the thesis's initial 20 iterations.
+const OVERHAND_START: [f64; 5] = [2.6, 2.0, 1.5, 0.0, 20.0];
+
+/// The overhand region: E1's shoulder in the upper part of its interval (from the thesis's initial
+/// 1.5 rad up), E2's in the lower part, so the arm comes down from above between E1 and E2.
+const OVERHAND_REGION: [(f64, f64); 5] = [(1.5, 2.6), (0.0, 2.5), (-0.2, 1.5), (0.0, 2.5), (0.0, 40.0)];
+
+/// The readings of [`throw_readings`], in the order of its table.
+const THROW_READINGS: [ThrowReading; 5] = [
+    ThrowReading {
+        name: "thesis's search, capped (throw.ron's spec)",
+        run: "throw-greedy-capped",
+        capped: true,
+        choice: GroupChoice::Random,
+        start: None,
+        region: None,
+    },
+    ThrowReading {
+        name: "thesis's search, literal",
+        run: "throw-greedy-literal",
+        capped: false,
+        choice: GroupChoice::Random,
+        start: None,
+        region: None,
+    },
+    ThrowReading {
+        name: "groups in turn, literal",
+        run: "throw-greedy-alternate-literal",
+        capped: false,
+        choice: GroupChoice::Alternate,
+        start: None,
+        region: None,
+    },
+    ThrowReading {
+        name: "overhand start, literal",
+        run: "throw-greedy-overhand-start-literal",
+        capped: false,
+        choice: GroupChoice::Random,
+        start: Some(OVERHAND_START),
+        region: None,
+    },
+    ThrowReading {
+        name: "overhand region, literal",
+        run: "throw-greedy-overhand-region-literal",
+        capped: false,
+        choice: GroupChoice::Random,
+        start: None,
+        region: Some(OVERHAND_REGION),
+    },
+];
+
+/// The thesis's throw search (spec §8.3.2: one stage of 400 draws, groups (s1, e1) / (s2, e2, τ2),
+/// window ±25 %) under the readings of [`THROW_READINGS`], each over [`THROW_SEEDS`], the literal
+/// Eq. 6.1 beside the capped one (issue #39 item 4). Writes `assets/controllers/throw-overhand.ron`
+/// when a literal-fitness run ends overhand and through the hoop: the best such by the literal Eq. 6.1.
+fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
+    let base = &thesis.controller;
+    let ids = base.free_params(&thesis.spec.parameters);
+    let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
+    let draws = thesis.spec.evaluations - 1;
+    let mut s = String::from("\n### The thesis's search on the literal Eq. 6.1 (issue #39)\n\n");
+    let _ = writeln!(
+        s,
+        "The search above (one stage of {draws} draws, the group (s1, e1) or (s2, e2, τ2) changed in a \
+         window of ±25 % of each interval, strict acceptance) under several readings, each run with seeds \
+         {}: with the height cap and with the literal Eq. 6.1; with the group chosen at random (the spec's \
+         reading) or in turn (its [GAP] alternative); from throw.ron's start (every shoulder 1.5 rad, every \
+         elbow 2.0 rad, τ2 = 20) or from an overhand start ((s1, e1, s2, e2, τ2) = ({})); over the \
+         thesis's intervals or over an overhand region (s1 in [{:.1}, {:.1}], s2 in [{:.1}, {:.1}] rad, \
+         the rest as the thesis; the ±25 % window is of these narrower intervals). Every row is the run's \
+         winner replayed.\n",
+        THROW_SEEDS.map(|k| k.to_string()).join(", "),
+        OVERHAND_START.map(|v| format!("{v:.1}")).join(", "),
+        OVERHAND_REGION[0].0,
+        OVERHAND_REGION[0].1,
+        OVERHAND_REGION[2].0,
+        OVERHAND_REGION[2].1,
+    );
+    s.push_str(
+        "| reading | seed | Eq. 6.1 (literal) | Eq. 6.1 (capped) | through the hoop | throw | turn at release (rad) | H_max (m) | Δ_min (m) | release iteration | accepted | winner (s1, e1, s2, e2, τ2) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    // The overhand start itself, before any search.
+    let start = throw_with_release(base, &ids, &OVERHAND_START)?;
+    let style = |r: Option<Release>| r.map_or("no release", |r| r.style());
+    let row = |s: &mut String,
+               name: &str,
+               seed: &str,
+               throw: &(nunes::ThrowOutcome, Option<Release>),
+               accepted: &str,
+               x: &[f64]| {
+        let (out, release) = throw;
+        let _ = writeln!(
+            s,
+            "| {name} | {seed} | {:.3} | {:.3} | {} | {} | {} | {:.2} | {:.2} | {} | {accepted} | {} |",
+            out.fitness(),
+            out.fitness_capped(cap),
+            if out.scored { "yes" } else { "no" },
+            style(*release),
+            release.map_or("—".to_string(), |r| format!("{:.3}", r.turn)),
+            out.h_max,
+            out.d_min,
+            out.released_at.map_or("never".to_string(), |k| k.to_string()),
+            x.iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(", "),
+        );
+    };
+    row(&mut s, "overhand start (before the search)", "—", &start, "—", &OVERHAND_START);
+    // (reading, literal fitness, overhand and through the hoop, winner) of every run.
+    let mut runs: Vec<(usize, f64, bool, Vec<f64>)> = Vec::new();
+    for (r, reading) in THROW_READINGS.iter().enumerate() {
+        for seed in THROW_SEEDS {
+            let mut optimiser = thesis.spec.optimiser.clone();
+            if let OptimiserSpec::Greedy { stages } = &mut optimiser {
+                for stage in stages {
+                    if let Modifier::LocalSubset { choice, .. } = &mut stage.modifier {
+                        *choice = reading.choice;
+                    }
+                }
+            }
+            let spec = OptimisationSpec {
+                name: if seed == SEED { reading.run.to_string() } else { format!("{}-{seed}", reading.run) },
+                objective: anima_scene::optimisation::ObjectiveSpec::Throw {
+                    iterations: 2000,
+                    height_cap: reading.capped,
+                },
+                optimiser,
+                seed,
+                ..thesis.spec.clone()
+            };
+            let mut controller = base.clone();
+            if let Some(x0) = reading.start {
+                controller.apply(&ids, &x0);
+            }
+            let space = reading.region.map(|region| {
+                let mut space = base.space(&ids);
+                for (d, (min, max)) in space.dims.iter_mut().zip(region) {
+                    (d.min, d.max) = (min, max);
+                }
+                space
+            });
+            let loaded = LoadedOptimisation { spec, controller };
+            let (x, accepted) = logged_search(repo, &loaded, &ids, space.as_ref())?;
+            let throw = throw_with_release(base, &ids, &x)?;
+            row(&mut s, reading.name, &seed.to_string(), &throw, &accepted.to_string(), &x);
+            let (out, release) = throw;
+            runs.push((r, out.fitness(), out.scored && style(release) == "overhand", x));
+        }
+    }
+    s.push('\n');
+    for (r, reading) in THROW_READINGS.iter().enumerate() {
+        let mine: Vec<_> = runs.iter().filter(|run| run.0 == r).collect();
+        let _ = writeln!(
+            s,
+            "- {}: overhand and through the hoop in {} of {} runs.",
+            reading.name,
+            mine.iter().filter(|run| run.2).count(),
+            mine.len()
+        );
+    }
+    let best =
+        runs.iter().filter(|run| run.2 && !THROW_READINGS[run.0].capped).max_by(|a, b| a.1.total_cmp(&b.1));
+    match best {
+        Some((r, f, _, x)) => {
+            let mut winner = base.clone();
+            winner.apply(&ids, x);
+            repo.write_text(
+                "assets/controllers/throw-overhand.ron",
+                &format!(
+                    "// An overhand throw through the hoop found by the thesis's search on the literal Eq. 6.1\n\
+                     // (`cargo xtask reproduce nunes-throw`, reading \"{}\"; literal Eq. 6.1 = {f:.3}).\n\
+                     // Everything else is assets/controllers/throw.ron.\n{}",
+                    THROW_READINGS[*r].name,
+                    winner.to_ron()
+                ),
+            )?;
+            let _ = writeln!(
+                s,
+                "\nThe best overhand throw through the hoop on the literal Eq. 6.1 ({}, {f:.3}) is \
+                 assets/controllers/throw-overhand.ron.",
+                THROW_READINGS[*r].name
+            );
+        }
+        None => s.push_str("\nNo run on the literal Eq. 6.1 ends overhand and through the hoop.\n"),
+    }
     Ok(s)
 }
 
