@@ -318,6 +318,17 @@ mod tests {
         box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5))
     }
 
+    /// The square (±1, ±1, 0) as two triangles sharing its diagonal from (−1, −1) to (1, 1).
+    fn unit_square() -> ([DVec3; 4], [[u32; 3]; 2]) {
+        let vertices = [
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(1.0, -1.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(-1.0, 1.0, 0.0),
+        ];
+        (vertices, [[0, 1, 2], [0, 2, 3]])
+    }
+
     /// Pixel of world point `p` as `render` places it (supersample 1).
     fn pixel_of(camera: &Camera, settings: &RenderSettings, p: DVec3) -> (u32, u32) {
         let view = View::new(camera, settings.width as usize, settings.height as usize).unwrap();
@@ -355,13 +366,7 @@ mod tests {
     #[test]
     fn back_faces_are_darker_than_front_faces() {
         // One square, seen from either side with the light straight from the viewer: |n · l| = 1 both times.
-        let vertices = [
-            DVec3::new(-1.0, -1.0, 0.0),
-            DVec3::new(1.0, -1.0, 0.0),
-            DVec3::new(1.0, 1.0, 0.0),
-            DVec3::new(-1.0, 1.0, 0.0),
-        ];
-        let triangles = [[0, 1, 2], [0, 2, 3]];
+        let (vertices, triangles) = unit_square();
         let mesh = [RenderMesh::new(&vertices, &triangles, [200, 200, 200])];
         let settings = RenderSettings { light_dir: DVec3::Z, ..flat_settings(40, 40) };
         let front = render(
@@ -440,13 +445,7 @@ mod tests {
 
     #[test]
     fn edges_darken_pixels_along_shared_edges_only() {
-        let vertices = [
-            DVec3::new(-1.0, -1.0, 0.0),
-            DVec3::new(1.0, -1.0, 0.0),
-            DVec3::new(1.0, 1.0, 0.0),
-            DVec3::new(-1.0, 1.0, 0.0),
-        ];
-        let triangles = [[0, 1, 2], [0, 2, 3]];
+        let (vertices, triangles) = unit_square();
         let camera = Camera::look_at(DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO, DVec3::Y, 60.0);
         let settings = flat_settings(101, 101);
         let plain =
