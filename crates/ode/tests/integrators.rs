@@ -2,7 +2,10 @@
 //! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t).
 
 use anima_ode::stability::{damped_stability_limit, stability_limit};
-use anima_ode::{Integrator, Jacobians, Linearized, OdeSystem, State, StepControl, Stepper, integrate};
+use anima_ode::{
+    IntegrationError, IntegrationStats, Integrator, Jacobians, Linearized, OdeSystem, State, StepControl,
+    Stepper, integrate,
+};
 
 struct Spring;
 
@@ -44,22 +47,25 @@ impl OdeSystem for Spring {
     }
 }
 
-/// Error of the state (x, v) at t_end for constant step h, against x = 2 + 2 cos t, v = −2 sin t.
-fn error(integrator: Integrator, h: f64, t_end: f64) -> f64 {
+/// The spring from x = 4, v = 0 integrated from 0 to `t_end` by a fresh stepper of `integrator` under
+/// `control`, `observe` called after every step: the state reached and the run's outcome.
+fn run_spring(
+    integrator: Integrator,
+    control: StepControl,
+    t_end: f64,
+    observe: impl FnMut(f64, &State<f64>),
+) -> (State<f64>, Result<IntegrationStats, IntegrationError>) {
     let mut st = Stepper::new(integrator, 1);
     let mut now = State::new(vec![4.0], vec![0.0]);
     let mut scratch = State::zeros(1);
-    integrate(
-        &mut Spring,
-        &mut st,
-        StepControl::Constant { dt: h },
-        0.0,
-        t_end,
-        &mut now,
-        &mut scratch,
-        |_, _| {},
-    )
-    .unwrap();
+    let outcome = integrate(&mut Spring, &mut st, control, 0.0, t_end, &mut now, &mut scratch, observe);
+    (now, outcome)
+}
+
+/// Error of the state (x, v) at t_end for constant step h, against x = 2 + 2 cos t, v = −2 sin t.
+fn error(integrator: Integrator, h: f64, t_end: f64) -> f64 {
+    let (now, outcome) = run_spring(integrator, StepControl::Constant { dt: h }, t_end, |_, _| {});
+    outcome.unwrap();
     (now.x[0] - (2.0 + 2.0 * t_end.cos())).hypot(now.v[0] + 2.0 * t_end.sin())
 }
 
@@ -98,21 +104,11 @@ fn energy(s: &State<f64>) -> f64 {
 #[test]
 fn symplectic_euler_keeps_energy_bounded_and_forward_euler_does_not() {
     let run = |integrator| {
-        let mut st = Stepper::new(integrator, 1);
-        let mut now = State::new(vec![4.0], vec![0.0]);
-        let mut scratch = State::zeros(1);
         let mut worst = 0.0f64;
-        integrate(
-            &mut Spring,
-            &mut st,
-            StepControl::Constant { dt: 0.05 },
-            0.0,
-            5000.0,
-            &mut now,
-            &mut scratch,
-            |_, s| worst = worst.max((energy(s) - 2.0).abs() / 2.0),
-        )
-        .unwrap();
+        let (now, outcome) = run_spring(integrator, StepControl::Constant { dt: 0.05 }, 5000.0, |_, s| {
+            worst = worst.max((energy(s) - 2.0).abs() / 2.0)
+        });
+        outcome.unwrap();
         (worst, energy(&now))
     };
     let (drift, _) = run(Integrator::SymplecticEuler);
@@ -160,12 +156,9 @@ fn measured_stability_intervals_on_the_imaginary_axis() {
 #[test]
 fn embedded_control_meets_its_tolerance_with_fewer_steps_when_looser() {
     let run = |tol: f64| {
-        let mut st = Stepper::new(Integrator::DormandPrince, 1);
-        let mut now = State::new(vec![4.0], vec![0.0]);
-        let mut scratch = State::zeros(1);
         let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-6, dt_max: 1.0 };
-        let stats =
-            integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap();
+        let (now, outcome) = run_spring(Integrator::DormandPrince, control, 10.0, |_, _| {});
+        let stats = outcome.unwrap();
         ((now.x[0] - (2.0 + 2.0 * 10f64.cos())).abs(), stats)
     };
     let (e_tight, s_tight) = run(1e-10);
@@ -178,12 +171,9 @@ fn embedded_control_meets_its_tolerance_with_fewer_steps_when_looser() {
 #[test]
 fn thesis_adaptive_euler_takes_smaller_steps_for_a_tighter_error() {
     let run = |tol: f64| {
-        let mut st = Stepper::new(Integrator::AdaptiveEuler, 1);
-        let mut now = State::new(vec![4.0], vec![0.0]);
-        let mut scratch = State::zeros(1);
         let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-7, dt_max: 1.0 };
-        let stats =
-            integrate(&mut Spring, &mut st, control, 0.0, 2.0, &mut now, &mut scratch, |_, _| {}).unwrap();
+        let (now, outcome) = run_spring(Integrator::AdaptiveEuler, control, 2.0, |_, _| {});
+        let stats = outcome.unwrap();
         ((now.x[0] - (2.0 + 2.0 * 2f64.cos())).abs(), stats)
     };
     let (e1, s1) = run(1e-4);
@@ -254,20 +244,8 @@ fn bdf2_damps_less_than_backward_euler() {
     let amplitude = |integrator| {
         let t_end = 20.0 * std::f64::consts::PI;
         let h = 2.0 * std::f64::consts::PI / 20.0;
-        let mut st = Stepper::new(integrator, 1);
-        let mut now = State::new(vec![4.0], vec![0.0]);
-        let mut scratch = State::zeros(1);
-        integrate(
-            &mut Spring,
-            &mut st,
-            StepControl::Constant { dt: h },
-            0.0,
-            t_end,
-            &mut now,
-            &mut scratch,
-            |_, _| {},
-        )
-        .unwrap();
+        let (now, outcome) = run_spring(integrator, StepControl::Constant { dt: h }, t_end, |_, _| {});
+        outcome.unwrap();
         (now.x[0] - 2.0).hypot(now.v[0]) / 2.0
     };
     let (be, bdf2) = (amplitude(Integrator::ImplicitEuler), amplitude(Integrator::Bdf2));
@@ -286,12 +264,8 @@ fn step_warning_fires_beyond_the_stability_limit_only() {
 
 #[test]
 fn controller_stops_when_the_smallest_step_cannot_meet_the_tolerance() {
-    let mut st = Stepper::new(Integrator::DormandPrince, 1);
-    let mut now = State::new(vec![4.0], vec![0.0]);
-    let mut scratch = State::zeros(1);
     let control = StepControl::Adaptive { tolerance: 1e-14, dt_initial: 0.5, dt_min: 0.1, dt_max: 1.0 };
-    let err =
-        integrate(&mut Spring, &mut st, control, 0.0, 10.0, &mut now, &mut scratch, |_, _| {}).unwrap_err();
+    let err = run_spring(Integrator::DormandPrince, control, 10.0, |_, _| {}).1.unwrap_err();
     assert!(matches!(err, anima_ode::IntegrationError::StepTooSmall { dt, .. } if dt == 0.1), "{err}");
 }
 
