@@ -178,6 +178,14 @@ def cloth_positions(V, obstacle, bunny_mesh=None, clearance=CLEARANCE):
     return x
 
 
+def cloth_setup(V, obstacle):
+    """What every peer builds first, in this order: the grid spacing h, the Bunny mesh (None over the
+    sphere), the cloth's initial positions, its triangles and its membrane equivalent."""
+    h = SIZE / (V - 1)
+    bm = bunny() if obstacle == "bunny" else None
+    return h, bm, cloth_positions(V, obstacle, bm), grid_triangles(V), membrane_equivalent(V)
+
+
 # ---------------------------------------------------------------- metrics
 def winding_numbers(p, verts, tris, chunk=2048):
     """Generalized winding number of points p[n,3] w.r.t. a closed triangle mesh (van Oosterom-Strackee)."""

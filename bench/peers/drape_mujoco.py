@@ -65,11 +65,7 @@ import mujoco
 
 t_build = time.perf_counter()
 V = a.V
-h = D.SIZE / (V - 1)
-bm = D.bunny() if a.obstacle == "bunny" else None
-x0 = D.cloth_positions(V, a.obstacle, bm)
-tris = D.grid_triangles(V)
-eq = D.membrane_equivalent(V)
+h, bm, x0, tris, eq = D.cloth_setup(V, a.obstacle)
 nu = a.poisson
 Et = eq["Et"]
 thick = a.thickness if a.thickness is not None else math.sqrt(12 * (1 - nu * nu) * D.PLATE_D / Et)

@@ -84,11 +84,7 @@ import newton
 wp.set_device("cpu")
 t_build = time.perf_counter()
 V = a.V
-h = D.SIZE / (V - 1)
-bm = D.bunny() if a.obstacle == "bunny" else None
-x0 = D.cloth_positions(V, a.obstacle, bm)
-tris = D.grid_triangles(V)
-eq = D.membrane_equivalent(V)
+h, bm, x0, tris, eq = D.cloth_setup(V, a.obstacle)
 radius = a.radius if a.radius is not None else min(2e-3, h / 4)
 self_margin = a.self_margin if a.self_margin is not None else min(2e-3, h / 4)
 RELAX = 0.85  # SolverVBD's dat_conservative_bound_relaxation default
