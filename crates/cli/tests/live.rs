@@ -10,38 +10,10 @@ use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use serde_json::Value;
+use websocket::{frame, receive};
 
-/// One masked client text frame.
-fn text_frame(payload: &[u8]) -> Vec<u8> {
-    assert!(payload.len() < 126);
-    let key = [0x21, 0x43, 0x65, 0x87];
-    let mut f = vec![0x81, 0x80 | payload.len() as u8];
-    f.extend_from_slice(&key);
-    f.extend(payload.iter().enumerate().map(|(i, b)| b ^ key[i % 4]));
-    f
-}
-
-/// The next server message, its opcode and payload; `None` when the socket closed.
-fn receive(s: &mut TcpStream) -> Option<(u8, Vec<u8>)> {
-    let mut head = [0u8; 2];
-    s.read_exact(&mut head).ok()?;
-    let len = match head[1] & 0x7f {
-        126 => {
-            let mut b = [0u8; 2];
-            s.read_exact(&mut b).ok()?;
-            u16::from_be_bytes(b) as usize
-        }
-        127 => {
-            let mut b = [0u8; 8];
-            s.read_exact(&mut b).ok()?;
-            u64::from_be_bytes(b) as usize
-        }
-        n => n as usize,
-    };
-    let mut payload = vec![0u8; len];
-    s.read_exact(&mut payload).ok()?;
-    Some((head[0] & 0x0f, payload))
-}
+#[path = "../../view/tests/support/websocket.rs"]
+mod websocket;
 
 /// The next text message, frames skipped.
 fn next_text(s: &mut TcpStream) -> String {
@@ -56,7 +28,7 @@ fn next_text(s: &mut TcpStream) -> String {
 
 /// Sends a command and returns the server's reply (`ok …` or `error …`), keeping the notes passed.
 fn say(s: &mut TcpStream, text: &str, notes: &mut Vec<String>) -> String {
-    s.write_all(&text_frame(text.as_bytes())).unwrap();
+    s.write_all(&frame(1, text.as_bytes(), true)).unwrap();
     loop {
         let t = next_text(s);
         if t.starts_with("ok ") || t.starts_with("error ") {
@@ -185,16 +157,6 @@ fn open_live(addr: &str) -> (TcpStream, Value) {
     (s, params)
 }
 
-/// One masked client close frame (status 1000).
-fn close_frame() -> Vec<u8> {
-    let key = [0x21, 0x43, 0x65, 0x87];
-    let payload = 1000u16.to_be_bytes();
-    let mut f = vec![0x88, 0x80 | payload.len() as u8];
-    f.extend_from_slice(&key);
-    f.extend(payload.iter().enumerate().map(|(i, b)| b ^ key[i % 4]));
-    f
-}
-
 /// The child's exit status once it exits, `None` if it still runs after `within`.
 fn exits_within(child: &mut KillOnDrop, within: Duration) -> Option<std::process::ExitStatus> {
     let start = std::time::Instant::now();
@@ -223,7 +185,7 @@ fn with_stop_with_page_the_run_ends_when_the_page_closes() {
         let (mut child, addr) = start_paused_walk(&out, &["--stop-with-page"]);
         let (mut s, _) = open_live(&addr);
         if polite {
-            s.write_all(&close_frame()).unwrap();
+            s.write_all(&frame(8, &1000u16.to_be_bytes(), true)).unwrap();
         }
         drop(s);
         let status = exits_within(&mut child, Duration::from_secs(10))
@@ -241,7 +203,7 @@ fn without_stop_with_page_the_run_outlives_its_page() {
     let out = std::env::temp_dir().join(format!("anima-live-stay-{}", std::process::id()));
     let (mut child, addr) = start_paused_walk(&out, &[]);
     let (mut s, _) = open_live(&addr);
-    s.write_all(&close_frame()).unwrap();
+    s.write_all(&frame(8, &1000u16.to_be_bytes(), true)).unwrap();
     drop(s);
     assert!(exits_within(&mut child, Duration::from_secs(2)).is_none(), "the run ended with its page");
     // Another page may watch it still.
