@@ -1,18 +1,10 @@
 //! The `anima` binary as a user runs it.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn anima() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_anima"))
-}
+mod common;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("anima-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{anima, temp_dir};
 
 fn assets() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/flex3d")

@@ -15,16 +15,9 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-fn anima() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_anima"))
-}
+mod common;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("anima-viewer-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{anima, temp_dir};
 
 fn scenes() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes")
