@@ -153,14 +153,23 @@ fn measured_stability_intervals_on_the_imaginary_axis() {
     assert!(abm4 > 0.0 && abm4 < 0.43, "ABM4 PECE grows slowly on the imaginary axis: {abm4}");
 }
 
+/// The position error |x − (2 + 2 cos t_end)| of a run to `t_end` under step control to `tolerance`
+/// (first step 0.1, steps from `dt_min` to 1), and the run's statistics.
+fn adaptive_position_error(
+    integrator: Integrator,
+    tolerance: f64,
+    dt_min: f64,
+    t_end: f64,
+) -> (f64, IntegrationStats) {
+    let control = StepControl::Adaptive { tolerance, dt_initial: 0.1, dt_min, dt_max: 1.0 };
+    let (now, outcome) = run_spring(integrator, control, t_end, |_, _| {});
+    let stats = outcome.unwrap();
+    ((now.x[0] - (2.0 + 2.0 * t_end.cos())).abs(), stats)
+}
+
 #[test]
 fn embedded_control_meets_its_tolerance_with_fewer_steps_when_looser() {
-    let run = |tol: f64| {
-        let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-6, dt_max: 1.0 };
-        let (now, outcome) = run_spring(Integrator::DormandPrince, control, 10.0, |_, _| {});
-        let stats = outcome.unwrap();
-        ((now.x[0] - (2.0 + 2.0 * 10f64.cos())).abs(), stats)
-    };
+    let run = |tol: f64| adaptive_position_error(Integrator::DormandPrince, tol, 1e-6, 10.0);
     let (e_tight, s_tight) = run(1e-10);
     let (e_loose, s_loose) = run(1e-5);
     assert!(e_tight < 1e-7, "global error {e_tight} at tolerance 1e-10");
@@ -170,12 +179,7 @@ fn embedded_control_meets_its_tolerance_with_fewer_steps_when_looser() {
 
 #[test]
 fn thesis_adaptive_euler_takes_smaller_steps_for_a_tighter_error() {
-    let run = |tol: f64| {
-        let control = StepControl::Adaptive { tolerance: tol, dt_initial: 0.1, dt_min: 1e-7, dt_max: 1.0 };
-        let (now, outcome) = run_spring(Integrator::AdaptiveEuler, control, 2.0, |_, _| {});
-        let stats = outcome.unwrap();
-        ((now.x[0] - (2.0 + 2.0 * 2f64.cos())).abs(), stats)
-    };
+    let run = |tol: f64| adaptive_position_error(Integrator::AdaptiveEuler, tol, 1e-7, 2.0);
     let (e1, s1) = run(1e-4);
     let (e2, s2) = run(1e-6);
     // h ∝ √tol, so 100× tighter means about 10× the steps and 10× less error (first order).
