@@ -329,6 +329,16 @@ mod tests {
         (vertices, [[0, 1, 2], [0, 2, 3]])
     }
 
+    /// The unit box in `colour`, framed from the direction (−1, −0.8, −1.2), on a `width` × `height` flat
+    /// picture: the camera, the settings and the picture.
+    fn oblique_unit_box(width: u32, height: u32, colour: [u8; 3]) -> (Camera, RenderSettings, Image) {
+        let mesh = unit_box();
+        let camera = Camera::framing(mesh.aabb(), DVec3::new(-1.0, -0.8, -1.2), DVec3::Y, 40.0);
+        let settings = flat_settings(width, height);
+        let img = render(&[RenderMesh::from_mesh(&mesh, colour)], &camera, &settings).unwrap();
+        (camera, settings, img)
+    }
+
     /// Pixel of world point `p` as `render` places it (supersample 1).
     fn pixel_of(camera: &Camera, settings: &RenderSettings, p: DVec3) -> (u32, u32) {
         let view = View::new(camera, settings.width as usize, settings.height as usize).unwrap();
@@ -338,10 +348,7 @@ mod tests {
 
     #[test]
     fn oblique_unit_box_fills_the_centre_and_leaves_corners_empty() {
-        let mesh = unit_box();
-        let camera = Camera::framing(mesh.aabb(), DVec3::new(-1.0, -0.8, -1.2), DVec3::Y, 40.0);
-        let settings = flat_settings(160, 120);
-        let img = render(&[RenderMesh::from_mesh(&mesh, [200, 120, 80])], &camera, &settings).unwrap();
+        let (_, _, img) = oblique_unit_box(160, 120, [200, 120, 80]);
         assert_ne!(img.pixel(80, 60), WHITE, "centre not shaded");
         for (x, y) in [(0, 0), (159, 0), (0, 119), (159, 119)] {
             assert_eq!(img.pixel(x, y), WHITE, "corner ({x}, {y}) drawn on");
@@ -350,10 +357,7 @@ mod tests {
 
     #[test]
     fn faces_with_different_normals_get_different_shades() {
-        let mesh = unit_box();
-        let camera = Camera::framing(mesh.aabb(), DVec3::new(-1.0, -0.8, -1.2), DVec3::Y, 40.0);
-        let settings = flat_settings(200, 200);
-        let img = render(&[RenderMesh::from_mesh(&mesh, [200, 200, 200])], &camera, &settings).unwrap();
+        let (camera, settings, img) = oblique_unit_box(200, 200, [200, 200, 200]);
         let shade = |p: DVec3| {
             let (x, y) = pixel_of(&camera, &settings, p);
             img.pixel(x, y)
