@@ -34,6 +34,17 @@ pub struct Spring {
     pub kind: SpringKind,
 }
 
+impl Spring {
+    /// The ends (i, j), the unit direction n = d / L from i to j and the length L = |d| of
+    /// d = x_j − x_i; `None` when the ends coincide (no direction: the spring gives nothing).
+    fn direction(&self, x: &[DVec3]) -> Option<(usize, usize, DVec3, f64)> {
+        let (i, j) = (self.i as usize, self.j as usize);
+        let d = x[j] - x[i];
+        let l = d.length();
+        (l != 0.0).then(|| (i, j, d / l, l))
+    }
+}
+
 /// Particles, springs, pins and gravity. Pinned particles keep their velocity (zero unless set).
 #[derive(Debug, Clone)]
 pub struct SpringNetwork {
@@ -233,13 +244,10 @@ impl SpringNetwork {
     /// The springs' forces added spring by spring, in their order.
     fn add_forces_by_spring(&self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
         for s in &self.springs {
-            let (i, j) = (s.i as usize, s.j as usize);
-            let d = x[j] - x[i];
-            let l = d.length();
-            if l == 0.0 {
+            let Some((i, j, n, l)) = s.direction(x) else {
                 continue;
-            }
-            let fs = spring_pull(s, d / l, l, v[i], v[j]);
+            };
+            let fs = spring_pull(s, n, l, v[i], v[j]);
             f[i] += fs;
             f[j] -= fs;
         }
@@ -320,13 +328,9 @@ impl Linearized<DVec3> for SpringNetwork {
             |i| gravity * masses[i],
             |e| {
                 let s = &list[e];
-                let (i, j) = (s.i as usize, s.j as usize);
-                let d = x[j] - x[i];
-                let l = d.length();
-                if l == 0.0 {
+                let Some((i, j, n, l)) = s.direction(x) else {
                     return SpringTerm::default();
-                }
-                let n = d / l;
+                };
                 let force = spring_pull(s, n, l, v[i], v[j]);
                 let mut g = 1.0 - s.rest_length / l;
                 if definite {
@@ -359,17 +363,10 @@ impl Linearized<DVec3> for SpringNetwork {
             |i| gravity * masses[i],
             |e| {
                 let s = &list[e];
-                let (i, j) = (s.i as usize, s.j as usize);
-                let d = x[j] - x[i];
-                let l = d.length();
-                if l == 0.0 {
+                let Some((i, j, n, l)) = s.direction(x) else {
                     return SpringTerm::default();
-                }
-                SpringTerm {
-                    force: spring_pull(s, d / l, l, v[i], v[j]),
-                    live: true,
-                    ..SpringTerm::default()
-                }
+                };
+                SpringTerm { force: spring_pull(s, n, l, v[i], v[j]), live: true, ..SpringTerm::default() }
             },
             f,
         );
@@ -396,13 +393,9 @@ impl Linearized<DVec3> for SpringNetwork {
         }
         self.add_spring_forces(x, v, f);
         for (e, s) in self.springs.iter().enumerate() {
-            let (i, j) = (s.i as usize, s.j as usize);
-            let d = x[j] - x[i];
-            let l = d.length();
-            if l == 0.0 {
+            let Some((i, j, n, l)) = s.direction(x) else {
                 continue;
-            }
-            let n = d / l;
+            };
             let ks = spring_stiffness_block(n, l, s.stiffness, s.rest_length, self.definite_jacobians);
             let ds = DMat3::from_cols(n * n.x, n * n.y, n * n.z) * s.damping;
             jac.k_diag[i] -= ks;
