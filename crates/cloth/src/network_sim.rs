@@ -117,32 +117,15 @@ impl Collider {
                     .iter()
                     .enumerate()
                     .fold((0, f64::INFINITY), |b, (k, &d)| if d < b.1 { (k, d) } else { b });
+                // Faces 2a and 2a + 1 are the low and high sides of axis a.
+                let axis = face / 2;
                 let mut q = p;
-                let n = match face {
-                    0 => {
-                        q.x = lo.x;
-                        -DVec3::X
-                    }
-                    1 => {
-                        q.x = hi.x;
-                        DVec3::X
-                    }
-                    2 => {
-                        q.y = lo.y;
-                        -DVec3::Y
-                    }
-                    3 => {
-                        q.y = hi.y;
-                        DVec3::Y
-                    }
-                    4 => {
-                        q.z = lo.z;
-                        -DVec3::Z
-                    }
-                    _ => {
-                        q.z = hi.z;
-                        DVec3::Z
-                    }
+                let n = if face % 2 == 0 {
+                    q[axis] = lo[axis];
+                    -DVec3::AXES[axis]
+                } else {
+                    q[axis] = hi[axis];
+                    DVec3::AXES[axis]
                 };
                 Some((q, n))
             }
