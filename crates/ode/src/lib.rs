@@ -22,6 +22,7 @@
 //!   the caller implements with its geometry ([`Stepper::step_with_contacts`]).
 //! - [`integrate`] drives a stepper with a [`StepControl`] (constant step, an embedded-error controller,
 //!   or the thesis's Euler rule) and stops with the step and coordinate where a value went non-finite.
+//! - [`SingleSpring`]: the Table 4.1 spring (Nedel 1993 §4.4), the test problem with an exact solution.
 //! - [`stability`] estimates the largest frequency of a system and the largest stable step of each
 //!   explicit method, so a user is warned before a step is known to blow up.
 //!
@@ -62,6 +63,7 @@ mod coord;
 mod implicit;
 mod integrator;
 pub mod parallel;
+mod spring;
 pub mod stability;
 mod stepper;
 
@@ -75,6 +77,7 @@ pub use implicit::contact;
 pub use implicit::workspace::SolveProfile;
 pub use implicit::{Jacobians, LinearSolver, Linearized, SpringBlock, SystemOut};
 pub use integrator::{Integrator, ParseIntegratorError};
+pub use spring::SingleSpring;
 pub use stepper::{OdeError, SavedHistory, State, StepStats, Stepper};
 
 /// A second-order system x'' = a(t, x, v) over `n_coords` coordinates.

@@ -1,51 +1,13 @@
 //! Convergence orders, energy behaviour, stability intervals and step control of every integrator, on
-//! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t).
+//! the FLEX3D Table 4.1 spring (x'' = −(x − 2), x(0) = 4, v(0) = 0; exact x = 2 + 2 cos t). The spring
+//! is linear, so one Newton step solves the implicit methods' equations exactly and their observed
+//! orders are the methods' own.
 
 use anima_ode::stability::{damped_stability_limit, stability_limit};
 use anima_ode::{
-    IntegrationError, IntegrationStats, Integrator, Jacobians, Linearized, OdeSystem, State, StepControl,
-    Stepper, integrate,
+    IntegrationError, IntegrationStats, Integrator, OdeSystem, SingleSpring, State, StepControl, Stepper,
+    integrate,
 };
-
-struct Spring;
-
-/// The spring is linear, so one Newton step solves the implicit methods' equations exactly and their
-/// observed orders are the methods' own.
-impl Linearized<f64> for Spring {
-    fn masses(&self) -> &[f64] {
-        &[1.0]
-    }
-    fn prescribed(&self) -> &[bool] {
-        &[false]
-    }
-    fn pattern(&self) -> &[(u32, u32)] {
-        &[]
-    }
-    fn force_and_jacobians(
-        &mut self,
-        _t: f64,
-        x: &[f64],
-        _v: &[f64],
-        f: &mut [f64],
-        jac: &mut Jacobians<f64>,
-    ) {
-        f[0] = -(x[0] - 2.0);
-        jac.k_diag[0] = -1.0;
-    }
-}
-
-impl OdeSystem for Spring {
-    type Coord = f64;
-    fn n_coords(&self) -> usize {
-        1
-    }
-    fn acceleration(&mut self, _t: f64, x: &[f64], _v: &[f64], a: &mut [f64]) {
-        a[0] = -(x[0] - 2.0);
-    }
-    fn linearized(&mut self) -> Option<&mut dyn Linearized<f64>> {
-        Some(self)
-    }
-}
 
 /// The spring from x = 4, v = 0 integrated from 0 to `t_end` by a fresh stepper of `integrator` under
 /// `control`, `observe` called after every step: the state reached and the run's outcome.
@@ -58,7 +20,8 @@ fn run_spring(
     let mut st = Stepper::new(integrator, 1);
     let mut now = State::new(vec![4.0], vec![0.0]);
     let mut scratch = State::zeros(1);
-    let outcome = integrate(&mut Spring, &mut st, control, 0.0, t_end, &mut now, &mut scratch, observe);
+    let outcome =
+        integrate(&mut SingleSpring::thesis(), &mut st, control, 0.0, t_end, &mut now, &mut scratch, observe);
     (now, outcome)
 }
 
@@ -283,7 +246,7 @@ fn alpha_energy(rho: f64, h: f64, steps: usize) -> (f64, f64) {
     let e0 = energy(&now);
     let mut gain = 0.0f64;
     for k in 0..steps {
-        st.step(&mut Spring, k as f64 * h, h, &now, &mut next).unwrap();
+        st.step(&mut SingleSpring::thesis(), k as f64 * h, h, &now, &mut next).unwrap();
         std::mem::swap(&mut now, &mut next);
         gain = gain.max((energy(&now) - e0) / e0);
     }
@@ -308,7 +271,7 @@ fn generalized_alpha_keeps_the_energy_of_an_undamped_oscillator_bounded() {
     let mut now = State::new(vec![4.0], vec![0.0]);
     let mut next = State::zeros(1);
     for k in 0..10_000 {
-        st.step(&mut Spring, k as f64 * 0.1, 0.1, &now, &mut next).unwrap();
+        st.step(&mut SingleSpring::thesis(), k as f64 * 0.1, 0.1, &now, &mut next).unwrap();
         std::mem::swap(&mut now, &mut next);
     }
     assert!(energy(&now) < 1e-6 * 2.0, "backward Euler kept {}", energy(&now) / 2.0);
@@ -327,7 +290,7 @@ fn generalized_alpha_damps_unresolved_modes_by_its_spectral_radius() {
         let mut next = State::zeros(1);
         let mut amplitudes = Vec::new();
         for k in 0..30 {
-            st.step(&mut Spring, k as f64 * h, h, &now, &mut next).unwrap();
+            st.step(&mut SingleSpring::thesis(), k as f64 * h, h, &now, &mut next).unwrap();
             std::mem::swap(&mut now, &mut next);
             amplitudes.push((now.x[0] - 2.0).hypot(now.v[0]));
         }
