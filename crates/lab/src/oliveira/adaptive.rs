@@ -838,10 +838,19 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
     let per_step = |r: &Run| r.wall_s / r.steps.max(1) as f64;
     let last = |r: &Run| *r.samples.last().expect("samples");
     type Check<'a> = Box<dyn Fn(&Run) -> String + 'a>;
-    let fewer_faces = Box::new(|a: &Run| {
-        let f = fraction(a, fine, (0.0, end), |x, y| x.nf < y.nf);
-        format!("{} ({:.0} % of the run)", yes(f > 0.99), 100.0 * f)
-    });
+    // The share of the whole run in which `pred(this run's sample, the other's)` holds, the claim
+    // holding above `above`.
+    let share_cell = |a: &Run, b: &Run, above: f64, pred: fn(&Sample, &Sample) -> bool| {
+        let f = fraction(a, b, (0.0, end), pred);
+        format!("{} ({:.0} % of the run)", yes(f > above), 100.0 * f)
+    };
+    // Two face counts, this run's first.
+    let faces_cell = |holds: bool, x: usize, y: usize| format!("{} ({x} vs {y} faces)", yes(holds));
+    // Steps and wall times of this run and the other.
+    let steps_and_wall_cell = |holds: bool, a: &Run, b: &Run| {
+        format!("{} ({} vs {} steps; {:.1} vs {:.1} s)", yes(holds), a.steps, b.steps, a.wall_s, b.wall_s)
+    };
+    let fewer_faces = Box::new(|a: &Run| share_cell(a, fine, 0.99, |x, y| x.nf < y.nf));
     // Test II (a): the hem's roundness at the first evaluation frame from `ROUND_FROM_S` on and at the
     // last, about the table's axis.
     let axis = object_axis(fine).unwrap_or(DVec2::ZERO);
@@ -980,14 +989,7 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
                 "(f) fewer steps and less wall time than the fine run",
                 "yes (134 127 vs 174 312 frames; 10 402 vs 19 238 s)",
                 Box::new(|a: &Run| {
-                    format!(
-                        "{} ({} vs {} steps; {:.1} vs {:.1} s)",
-                        yes(a.steps < fine.steps && a.wall_s < fine.wall_s),
-                        a.steps,
-                        fine.steps,
-                        a.wall_s,
-                        fine.wall_s
-                    )
+                    steps_and_wall_cell(a.steps < fine.steps && a.wall_s < fine.wall_s, a, fine)
                 }),
             ));
             rows.push((
@@ -1045,29 +1047,19 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
                 "yes",
                 Box::new(|a: &Run| {
                     let (x, f) = (last(a).nf, last(fine).nf);
-                    format!("{} ({x} vs {f} faces)", yes(x > f))
+                    faces_cell(x > f, x, f)
                 }),
             ));
             rows.push((
                 "(c) adaptive Δt smaller than the fine Δt",
                 "yes",
-                Box::new(|a: &Run| {
-                    let f = fraction(a, fine, (0.0, end), |x, y| x.dt < y.dt);
-                    format!("{} ({:.0} % of the run)", yes(f > 0.5), 100.0 * f)
-                }),
+                Box::new(|a: &Run| share_cell(a, fine, 0.5, |x, y| x.dt < y.dt)),
             ));
             rows.push((
                 "(c) more steps and more wall time than the fine run",
                 "yes (1 020 828 vs 346 795 frames; 35 986 vs 13 871 s)",
                 Box::new(|a: &Run| {
-                    format!(
-                        "{} ({} vs {} steps; {:.1} vs {:.1} s)",
-                        yes(a.steps > fine.steps && a.wall_s > fine.wall_s),
-                        a.steps,
-                        fine.steps,
-                        a.wall_s,
-                        fine.wall_s
-                    )
+                    steps_and_wall_cell(a.steps > fine.steps && a.wall_s > fine.wall_s, a, fine)
                 }),
             ));
             rows.push((
@@ -1131,7 +1123,7 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
                 "yes",
                 Box::new(|a: &Run| {
                     let (x, y) = (sample_at(a, 0.1).nf, sample_at(sub, 0.1).nf);
-                    format!("{} ({x} vs {y} faces)", yes(x > y))
+                    faces_cell(x > y, x, y)
                 }),
             ));
             rows.push((
@@ -1139,16 +1131,13 @@ fn claims(test: &Test, runs: &[Run]) -> Result<String> {
                 "yes, far more",
                 Box::new(|a: &Run| {
                     let (x, y) = (last(a).nf, last(sub).nf);
-                    format!("{} ({x} vs {y} faces)", yes(y > x))
+                    faces_cell(y > x, x, y)
                 }),
             ));
             rows.push((
                 "(c) remeshing Δt always smaller than 1-to-4's",
                 "yes",
-                Box::new(|a: &Run| {
-                    let f = fraction(a, sub, (0.0, end), |x, y| x.dt < y.dt);
-                    format!("{} ({:.0} % of the run)", yes(f > 0.99), 100.0 * f)
-                }),
+                Box::new(|a: &Run| share_cell(a, sub, 0.99, |x, y| x.dt < y.dt)),
             ));
             rows.push((
                 "(d) remeshing: more steps, about half the time per step",
