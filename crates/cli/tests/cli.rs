@@ -1,10 +1,16 @@
 //! The `anima` binary as a user runs it.
 
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
 mod common;
 
 use common::{anima, temp_dir};
+
+/// `anima run --quiet <switches> --out <out> <scene>`, its output captured.
+fn run_quiet(switches: &[&str], out: &Path, scene: &Path) -> Output {
+    anima().args(["run", "--quiet"]).args(switches).arg("--out").arg(out).arg(scene).output().unwrap()
+}
 
 fn assets() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/flex3d")
@@ -76,7 +82,7 @@ fn a_malformed_script_is_refused_with_file_line_and_column() {
     let path = dir.join("bad.par");
     let good = std::fs::read_to_string(assets().join("a2-2-vento.par")).unwrap();
     std::fs::write(&path, good.replace("DELTA_t = 0.001", "DELTA_t = fast")).unwrap();
-    let out = anima().args(["run", "--quiet", "--out"]).arg(dir.join("out")).arg(&path).output().unwrap();
+    let out = run_quiet(&[], &dir.join("out"), &path);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.par:3:11"), "{err}");
@@ -181,12 +187,7 @@ fn every_scene_file_under_assets_runs_and_every_part_is_refused_as_a_scene() {
     for file in &files {
         let rel = file.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/");
         let out = temp_dir("every-asset");
-        let o = anima()
-            .args(["run", "--quiet", "--no-pictures", "--no-frames", "--duration", "0.2", "--out"])
-            .arg(&out)
-            .arg(file)
-            .output()
-            .unwrap();
+        let o = run_quiet(&["--no-pictures", "--no-frames", "--duration", "0.2"], &out, file);
         let err = String::from_utf8_lossy(&o.stderr);
         let folder = rel.split('/').next().unwrap();
         if rel == "flex3d/fig6-4-papel-ocr.par" {
@@ -283,12 +284,7 @@ fn the_sail_with_modern_self_collision_reports_no_self_intersections() {
 fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
     let sheet = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes/standard-sheet-32.ron");
     let out = temp_dir("switch");
-    let o = anima()
-        .args(["run", "--quiet", "--friction", "viscous", "--out"])
-        .arg(&out)
-        .arg(&sheet)
-        .output()
-        .unwrap();
+    let o = run_quiet(&["--friction", "viscous"], &out, &sheet);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("does not apply to a sheet scene"), "{err}");
@@ -301,12 +297,7 @@ fn a_switch_that_does_not_apply_to_the_scene_is_an_error() {
 fn adaptive_euler_on_a_fixed_step_scene_is_refused() {
     let curtain = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/flex3d/curtain.ron");
     let out = temp_dir("adaptive");
-    let o = anima()
-        .args(["run", "--quiet", "--integrator", "adaptive-euler", "--out"])
-        .arg(&out)
-        .arg(&curtain)
-        .output()
-        .unwrap();
+    let o = run_quiet(&["--integrator", "adaptive-euler"], &out, &curtain);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--integrator adaptive-euler") && err.contains("chooses its own steps"), "{err}");
@@ -317,7 +308,7 @@ fn adaptive_euler_on_a_fixed_step_scene_is_refused() {
     let file = out.join("curtain-adaptive.ron");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(&file, text).unwrap();
-    let o = anima().args(["run", "--quiet", "--out"]).arg(out.join("run")).arg(&file).output().unwrap();
+    let o = run_quiet(&[], &out.join("run"), &file);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -402,12 +393,7 @@ fn the_static_drapes_take_their_pinned_step_counts() {
         ("test-3-sphere-5x5", 23720, None),
     ] {
         let out = dir.join(scene);
-        let o = anima()
-            .args(["run", "--quiet", "--no-pictures", "--no-frames", "--out"])
-            .arg(&out)
-            .arg(assets.join(format!("{scene}.ron")))
-            .output()
-            .unwrap();
+        let o = run_quiet(&["--no-pictures", "--no-frames"], &out, &assets.join(format!("{scene}.ron")));
         assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
         let summary: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
