@@ -3,14 +3,16 @@
 //! not, at Δt = 1/60 s; and Oliveira's three fine drapes at 1/60 s never have a particle inside an
 //! object.
 
-use std::path::Path;
-
 use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::network_sim::{Collider, NetworkSim};
-use anima_cloth::oliveira::{OliveiraCloth, OliveiraScene, ShapeDesc, StepRule};
+use anima_cloth::oliveira::{OliveiraCloth, ShapeDesc, StepRule};
 use anima_cloth::spring_net::SheetSpec;
-use anima_geom::{DVec3, read_obj};
+use anima_geom::DVec3;
 use anima_ode::Integrator;
+
+mod common;
+
+use common::load_scene;
 
 const DT: f64 = 1.0 / 60.0;
 
@@ -78,7 +80,7 @@ fn oliveira_cloth_on_a_10_degree_incline_sticks_or_slides() {
     let normal = DVec3::new(theta.sin(), 0.0, theta.cos());
     let downhill = DVec3::new(theta.cos(), 0.0, -theta.sin());
     for (mu, sticks) in [(0.4, true), (0.05, false)] {
-        let mut scene = load_scene("test-3-sphere-17x17.ron").0;
+        let mut scene = load_scene("oliveira", "test-3-sphere-17x17.ron").0;
         scene.material.permeability = 0.0;
         scene.material.friction = mu;
         scene.cloth.size_m = 0.4;
@@ -124,29 +126,12 @@ fn oliveira_cloth_on_a_10_degree_incline_sticks_or_slides() {
     }
 }
 
-/// An Oliveira scene of `assets/oliveira/` and the meshes it names.
-fn load_scene(file: &str) -> (OliveiraScene, Vec<anima_geom::TriangleMesh>) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/oliveira");
-    let scene: OliveiraScene = ron::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap();
-    let meshes = scene
-        .objects
-        .iter()
-        .filter_map(|o| match &o.shape {
-            ShapeDesc::Mesh { file, .. } => {
-                Some(read_obj(std::io::BufReader::new(std::fs::File::open(dir.join(file)).unwrap())).unwrap())
-            }
-            _ => None,
-        })
-        .collect();
-    (scene, meshes)
-}
-
 /// Oliveira's three fine drapes at 1/60 s with generalised-α and contact in the solve: no particle is
 /// inside an object after any step, and the runs end finite.
 #[test]
 fn no_particle_inside_an_object_at_any_step_of_the_three_drapes_at_1_60_s() {
     for file in ["test-1-bunny-17x17.ron", "test-2-table-17x17.ron", "test-3-sphere-17x17.ron"] {
-        let (mut scene, meshes) = load_scene(file);
+        let (mut scene, meshes) = load_scene("oliveira", file);
         scene.integrator = Integrator::GeneralizedAlpha;
         scene.time_step = StepRule::Fixed { dt_s: 1.0 / 60.0 };
         scene.options.contact = ContactMode::InSolve;

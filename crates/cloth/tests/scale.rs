@@ -3,17 +3,17 @@
 //! of the Bunny and out of itself; and (issue #42) the same drape remeshed, out of itself across every
 //! remesh.
 
-use std::path::Path;
-
 use anima_cloth::StepError;
 use anima_cloth::bounds::Bound;
 use anima_cloth::network_sim::NetworkSim;
-use anima_cloth::oliveira::{
-    AdaptiveCloth, AdaptiveMethod, OliveiraCloth, OliveiraScene, ShapeDesc, SizingRemeshing,
-};
+use anima_cloth::oliveira::{AdaptiveCloth, AdaptiveMethod, OliveiraCloth, SizingRemeshing};
 use anima_cloth::spring_net::SheetSpec;
-use anima_geom::{DVec3, TriangleMesh, count_self_intersections, read_obj};
+use anima_geom::{DVec3, count_self_intersections};
 use anima_ode::Integrator;
+
+mod common;
+
+use common::load_scene;
 
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap()
@@ -21,23 +21,6 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 
 fn bits(x: &[DVec3]) -> Vec<[u64; 3]> {
     x.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
-}
-
-/// A drape scene of `assets/scenes/` with its meshes.
-fn drape(name: &str) -> (OliveiraScene, Vec<TriangleMesh>) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/scenes");
-    let scene: OliveiraScene = ron::from_str(&std::fs::read_to_string(dir.join(name)).unwrap()).unwrap();
-    let meshes = scene
-        .objects
-        .iter()
-        .filter_map(|o| match &o.shape {
-            ShapeDesc::Mesh { file, .. } => {
-                Some(read_obj(std::fs::File::open(dir.join(file)).unwrap()).unwrap())
-            }
-            _ => None,
-        })
-        .collect();
-    (scene, meshes)
 }
 
 /// The implicit step's products, sums, preconditioner and assembly share their work out over the
@@ -62,7 +45,7 @@ fn the_same_bits_on_one_two_and_four_threads() {
     let one = sheet(1);
     assert!(one == sheet(2) && one == sheet(4), "the sheet's state differs between thread counts");
 
-    let (scene, meshes) = drape("drape-bunny-65.ron");
+    let (scene, meshes) = load_scene("scenes", "drape-bunny-65.ron");
     let run = |threads: usize| {
         pool(threads).install(|| {
             let mut cloth = OliveiraCloth::new(&scene, meshes.clone()).unwrap();
@@ -121,7 +104,7 @@ fn a_diverging_sheet_is_stopped_by_its_bounds_soon_after_it_leaves_them() {
 #[test]
 fn the_forty_by_forty_bunny_drape_at_a_sixtieth_of_a_second_drapes() {
     for friction in [None, Some(0.0)] {
-        let (mut scene, meshes) = drape("drape-bunny-65.ron");
+        let (mut scene, meshes) = load_scene("scenes", "drape-bunny-65.ron");
         scene.cloth.vertices_per_side = 40;
         scene.duration_s = 2.0;
         if let Some(f) = friction {
@@ -177,7 +160,7 @@ fn the_forty_by_forty_bunny_drape_at_a_sixtieth_of_a_second_drapes() {
 /// included, on one thread and on two.
 #[test]
 fn a_remeshed_drape_at_a_sixtieth_of_a_second_never_crosses_itself() {
-    let (mut scene, meshes) = drape("drape-bunny-65.ron");
+    let (mut scene, meshes) = load_scene("scenes", "drape-bunny-65.ron");
     scene.cloth.vertices_per_side = 17;
     let run = |threads: usize| {
         pool(threads).install(|| {
