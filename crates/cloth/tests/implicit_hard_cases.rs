@@ -140,15 +140,22 @@ fn implicit_euler_takes_steps_where_explicit_methods_blow_up() {
     );
 }
 
-#[test]
-fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_percent() {
-    // Undamped, so that only the integrator decides stability.
-    let spec = SheetSpec { n: 12, damping: 0.0, ..SheetSpec::standard(12) };
+/// The standard `n` × `n` sheet without damping, at rest where it is built: its spec, its network, its
+/// positions and the power iteration's estimate of its highest frequency after `iterations` steps.
+fn undamped_sheet_at_rest(n: usize, iterations: usize) -> (SheetSpec, SpringNetwork, Vec<DVec3>, f64) {
+    let spec = SheetSpec { n, damping: 0.0, ..SheetSpec::standard(n) };
     let mut net = spec.build().unwrap();
     let x = spec.positions();
     let v = vec![DVec3::ZERO; x.len()];
     let frozen = net.pinned().to_vec();
-    let omega = max_frequency(&mut net, 0.0, &x, &v, &frozen, 200);
+    let omega = max_frequency(&mut net, 0.0, &x, &v, &frozen, iterations);
+    (spec, net, x, omega)
+}
+
+#[test]
+fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_percent() {
+    // Undamped, so that only the integrator decides stability.
+    let (spec, _, _, omega) = undamped_sheet_at_rest(12, 200);
     let predicted = stability_limit(Integrator::SymplecticEuler) / omega;
     // Measured: the largest step at which 0.5 s of motion stays slow (bisection on a log scale).
     let stable = |dt: f64| {
@@ -173,12 +180,8 @@ fn stability_estimate_predicts_the_largest_stable_symplectic_step_within_20_perc
 #[test]
 fn gershgorin_bound_lies_above_the_power_iteration_estimate() {
     use anima_ode::OdeSystem;
-    let spec = SheetSpec { n: 10, damping: 0.0, ..SheetSpec::standard(10) };
-    let mut net = spec.build().unwrap();
-    let x = spec.positions();
+    let (_, mut net, x, estimate) = undamped_sheet_at_rest(10, 300);
     let v = vec![DVec3::ZERO; x.len()];
-    let frozen = net.pinned().to_vec();
-    let estimate = max_frequency(&mut net, 0.0, &x, &v, &frozen, 300);
     let bound = anima_ode::stability::gershgorin_frequency(net.linearized().unwrap(), 0.0, &x, &v);
     assert!(estimate > 0.0 && bound >= estimate * 0.999, "estimate {estimate}, bound {bound}");
     assert!(bound < 3.0 * estimate, "the bound should not be loose by more than 3×: {bound} vs {estimate}");
