@@ -65,7 +65,7 @@ mod tests {
     use anima_scene::{LoadOptions, Scene};
     use serde_json::Value;
 
-    use crate::run::{Detail, Overrides, RunOptions, Silent, run};
+    use crate::run::{Detail, Overrides, RunOptions, Silent, Summary, run};
 
     fn scene(rel: &str, duration_s: f64) -> Scene {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets").join(rel);
@@ -80,6 +80,27 @@ mod tests {
         dir
     }
 
+    /// Runs `assets/<rel>` for `duration_s`, pictures off, into a fresh folder named after `name`: the
+    /// folder, the summary and the run's series.
+    fn run_with_series(rel: &str, duration_s: f64, name: &str) -> (PathBuf, Summary, Value) {
+        let dir = temp_dir(name);
+        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
+        let summary = run(&scene(rel, duration_s), "t", &opts, &mut Silent).unwrap();
+        let series: Value =
+            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        (dir, summary, series)
+    }
+
+    /// The most crossings at a frame after frame 0 are the summary's largest (frame 0's are not counted
+    /// there).
+    fn assert_largest_crossings_are_the_summarys(series: &Value, summary: &Summary) {
+        let crossings = values(series, "self-intersections");
+        assert_eq!(
+            crossings[1..].iter().copied().fold(0.0, f64::max),
+            summary.self_intersections.unwrap() as f64
+        );
+    }
+
     fn values(series: &Value, name: &str) -> Vec<f64> {
         let s = series["series"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
         s["values"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect()
@@ -87,34 +108,21 @@ mod tests {
 
     #[test]
     fn a_sheet_run_writes_a_value_per_frame_from_frame_0_that_ends_where_the_summary_does() {
-        let dir = temp_dir("sheet");
-        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
-        let summary = run(&scene("scenes/standard-sheet-32.ron", 0.2), "t", &opts, &mut Silent).unwrap();
-        let series: Value =
-            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let (dir, summary, series) = run_with_series("scenes/standard-sheet-32.ron", 0.2, "sheet");
         let t: Vec<f64> = series["time_s"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
         assert_eq!(t.len(), summary.frames + 1, "frame 0 and every frame");
         assert_eq!((t[0], *t.last().unwrap()), (0.0, summary.simulated_seconds));
         let energy = values(&series, "kinetic energy");
         let Detail::Sheet(d) = &summary.detail else { panic!("a sheet") };
         assert_eq!((energy[0], *energy.last().unwrap()), (0.0, d.kinetic_energy));
-        let crossings = values(&series, "self-intersections");
-        assert_eq!(crossings.len(), t.len());
-        assert_eq!(
-            crossings[1..].iter().copied().fold(0.0, f64::max),
-            summary.self_intersections.unwrap() as f64
-        );
+        assert_eq!(values(&series, "self-intersections").len(), t.len());
+        assert_largest_crossings_are_the_summarys(&series, &summary);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn a_remeshed_drape_writes_its_energy_crossings_and_vertex_count_per_frame() {
-        let dir = temp_dir("drape");
-        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
-        let scene = scene("oliveira/test-2-table-adaptive.ron", 0.1);
-        let summary = run(&scene, "t", &opts, &mut Silent).unwrap();
-        let series: Value =
-            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let (dir, summary, series) = run_with_series("oliveira/test-2-table-adaptive.ron", 0.1, "drape");
         let Detail::Oliveira(d) = &summary.detail else { panic!("a drape") };
         let vertices = values(&series, "vertices");
         assert_eq!(vertices.len(), summary.frames + 1);
@@ -123,21 +131,13 @@ mod tests {
             (d.particles_at_start as f64, d.particles as f64)
         );
         assert_eq!(*values(&series, "kinetic energy").last().unwrap(), d.kinetic_energy);
-        let crossings = values(&series, "self-intersections");
-        assert_eq!(
-            crossings[1..].iter().copied().fold(0.0, f64::max),
-            summary.self_intersections.unwrap() as f64
-        );
+        assert_largest_crossings_are_the_summarys(&series, &summary);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn a_flex3d_run_writes_its_energy_and_crossings_per_frame() {
-        let dir = temp_dir("flex3d");
-        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
-        let summary = run(&scene("flex3d/curtain.ron", 0.2), "t", &opts, &mut Silent).unwrap();
-        let series: Value =
-            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let (dir, summary, series) = run_with_series("flex3d/curtain.ron", 0.2, "flex3d");
         let Detail::Flex3d(d) = &summary.detail else { panic!("a FLEX3D scene") };
         let energy = values(&series, "kinetic energy");
         assert_eq!(energy.len(), summary.frames + 1);
@@ -148,11 +148,7 @@ mod tests {
 
     #[test]
     fn a_walk_writes_the_pelvis_and_contacts_at_each_picture_frame() {
-        let dir = temp_dir("walk");
-        let opts = RunOptions { pictures: false, ..RunOptions::writing_to(&dir) };
-        run(&scene("scenes/walk.ron", 2.0), "t", &opts, &mut Silent).unwrap();
-        let series: Value =
-            serde_json::from_slice(&std::fs::read(dir.join(super::SERIES_FILE)).unwrap()).unwrap();
+        let (dir, _, series) = run_with_series("scenes/walk.ron", 2.0, "walk");
         let t = series["time_s"].as_array().unwrap();
         // The walk's frames are 0.5 s apart: 0, 0.5, …, 2.
         assert_eq!(t.len(), 5, "{series}");
