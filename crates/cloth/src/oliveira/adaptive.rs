@@ -619,6 +619,14 @@ fn rebuild_from_adaptive(
     if log.is_empty() {
         return false;
     }
+    // Each slot's old particle: itself for the particles the pass started from (slots are appended,
+    // never reused), a new vertex's first parent's otherwise (replayed in order: a parent may be new).
+    let old_n = cloth.positions().len();
+    let mut slot_source: Vec<u32> = (0..mesh.rest().len() as u32).collect();
+    for nv in &log.new_vertices {
+        slot_source[nv.vertex as usize] = slot_source[nv.parents[0] as usize];
+    }
+    debug_assert!(slot_source.iter().all(|&s| (s as usize) < old_n));
     let renum = mesh.compact();
     if let Some(stamps) = refined_at {
         let old = std::mem::take(stamps);
@@ -640,7 +648,13 @@ fn rebuild_from_adaptive(
     stats.pushed_out += push_out_new(cloth, material.triangles(), &mut x, &mut v, &new);
     mesh.positions_mut().copy_from_slice(&x);
     mesh.velocities_mut().copy_from_slice(&v);
-    cloth.replace_mesh(material, x, v, tracked as usize, gravity);
+    let mut sources = vec![0u32; x.len()];
+    for (slot, &new) in renum.vertex.iter().enumerate() {
+        if new != NONE {
+            sources[new as usize] = slot_source[slot];
+        }
+    }
+    cloth.replace_mesh(material, x, v, tracked as usize, gravity, Some(&sources));
     true
 }
 
@@ -918,7 +932,7 @@ fn subdivision_pass(
     }
     stats.pushed_out += push_out_new(cloth, material.triangles(), &mut xc, &mut vc, &new);
     let tracked = map[tracked_slot as usize] as usize;
-    cloth.replace_mesh(material, xc, vc, tracked, gravity);
+    cloth.replace_mesh(material, xc, vc, tracked, gravity, None);
     true
 }
 
@@ -1075,7 +1089,7 @@ mod tests {
             .collect();
         let v = vec![DVec3::ZERO; x.len()];
         let tracked = c.cloth().tracked_vertex();
-        c.cloth_mut().replace_mesh(mesh, x, v, tracked, OLIVEIRA_GRAVITY);
+        c.cloth_mut().replace_mesh(mesh, x, v, tracked, OLIVEIRA_GRAVITY, None);
     }
 
     #[test]

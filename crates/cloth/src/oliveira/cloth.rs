@@ -822,7 +822,10 @@ impl OliveiraCloth {
     /// particles' state, masses and drag from the new vertex areas, springs from the new edges, bending
     /// elements from the new interior edges, m_min and k^e_max (hence the next Δt), a fresh stepper of
     /// the same integrator (generalised-α's acceleration zero), and particle P's new index. Time, step count
-    /// and contact history are kept.
+    /// and contact history are kept. `sources`, when given, names for each new particle an old one near
+    /// it (the one it was made from, or itself): the in-solve contact's distance bounds are carried over
+    /// from them ([`ClearanceCache::inherit`]) instead of starting again, which would query every
+    /// particle against every object at the next step.
     pub(crate) fn replace_mesh(
         &mut self,
         mesh: MaterialMesh,
@@ -830,6 +833,7 @@ impl OliveiraCloth {
         v: Vec<DVec3>,
         tracked: usize,
         gravity: DVec3,
+        sources: Option<&[u32]>,
     ) {
         let n = x.len();
         debug_assert!(v.len() == n && mesh.n_vertices() == n && tracked < n);
@@ -871,7 +875,10 @@ impl OliveiraCloth {
         self.next = State::zeros(n);
         self.clearance = vec![0.0; n];
         self.responded = vec![false; n];
-        self.solve_cache.reset(n);
+        match sources {
+            Some(sources) if sources.len() == n => self.solve_cache.inherit(sources),
+            _ => self.solve_cache.reset(n),
+        }
         self.tracked = tracked;
         self.repelled_edges.clear();
         // The new triangles make the response's broad phase rebuild its trees at its next update.

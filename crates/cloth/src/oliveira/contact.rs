@@ -208,6 +208,23 @@ impl ClearanceCache {
         self.found.clear();
         self.found.resize(n, None);
     }
+
+    /// Carries the bounds over to a changed set of particles: particle k takes the reference point and
+    /// bound of old particle `sources[k]` (none, and so a query at its next step, when that is out of
+    /// range). A bound is a distance from its reference point to every surface, not a property of the
+    /// particle that had it, so it holds for whichever particle inherits it; one inherited from the
+    /// particle a remesh made it from (its parent) skips that particle's queries while it stays in the
+    /// open, as the parent's would have. The queries answered are the same as with a reset cache.
+    pub fn inherit(&mut self, sources: &[u32]) {
+        let old = (std::mem::take(&mut self.reference), std::mem::take(&mut self.clearance));
+        let take = |k: u32| {
+            let k = k as usize;
+            if k < old.0.len() && k < old.1.len() { (old.0[k], old.1[k]) } else { (DVec3::ZERO, 0.0) }
+        };
+        (self.reference, self.clearance) = sources.iter().map(|&k| take(k)).unzip();
+        self.found.clear();
+        self.found.resize(sources.len(), None);
+    }
 }
 
 /// The objects as the implicit solve sees them ([`super::scene::Options::contact`] = `InSolve`): a
@@ -398,11 +415,9 @@ mod tests {
         assert!((lit - DVec3::new(1.3, 0.0, -0.25)).length() < 1e-15, "{lit}");
     }
 
-    /// The in-solve contact queries run over the particles on every core: the contacts found, their
-    /// order and the clearance cache are the same on one thread as on two and four (a cloud large
-    /// enough to split, around a ball on a floor, queried twice so that the cache is read too).
-    #[test]
-    fn solve_contacts_are_the_same_on_any_thread_count() {
+    /// A ball on a floor, and `n` points scattered within a centimetre of the ball's surface (some
+    /// inside it) with where they move to.
+    fn ball_floor_and_cloud(n: usize) -> ([Collider; 2], Vec<DVec3>, Vec<DVec3>) {
         use anima_geom::{HalfSpace, Sphere};
         let colliders = [
             Collider {
@@ -416,7 +431,6 @@ mod tests {
                 friction: 0.4,
             },
         ];
-        let n = 12_000;
         let wobble = |k: usize, s: f64| ((k as f64 + 1.0) * s).sin();
         let start: Vec<DVec3> = (0..n)
             .map(|k| {
@@ -426,6 +440,15 @@ mod tests {
             .collect();
         let end: Vec<DVec3> =
             start.iter().enumerate().map(|(k, p)| *p * (1.0 - 0.02 * wobble(k, 3.3))).collect();
+        (colliders, start, end)
+    }
+
+    /// The in-solve contact queries run over the particles on every core: the contacts found, their
+    /// order and the clearance cache are the same on one thread as on two and four (a cloud large
+    /// enough to split, around a ball on a floor, queried twice so that the cache is read too).
+    #[test]
+    fn solve_contacts_are_the_same_on_any_thread_count() {
+        let (colliders, start, end) = ball_floor_and_cloud(12_000);
         let query = |threads: usize| {
             rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
                 let mut cache = ClearanceCache::default();
@@ -444,6 +467,46 @@ mod tests {
         let one = query(1);
         assert!(one.matches("coordinate").count() > 1000, "too few contacts to test");
         assert!(one == query(2) && one == query(4), "the contacts depend on the thread count");
+    }
+
+    /// A remeshed cloth's particles inherit the distance bounds of the particles they were made from:
+    /// the contacts found afterwards are those a cache started afresh finds, while the inherited bounds
+    /// spare the queries of particles still in the open.
+    #[test]
+    fn inherited_clearance_bounds_find_what_fresh_queries_find() {
+        let (colliders, start, end) = ball_floor_and_cloud(2_000);
+        // Half the cloud pulled out to 0.3–0.35 m, where its bounds are worth keeping.
+        let out = |p: &[DVec3]| -> Vec<DVec3> {
+            p.iter().enumerate().map(|(k, &x)| if k % 2 == 0 { x * (1.2 + 0.2 * x.z) } else { x }).collect()
+        };
+        let (start, end) = (out(&start), out(&end));
+        let mut cache = ClearanceCache::default();
+        let mut model =
+            SolveContacts { colliders: &colliders, friction: 0.3, restitution: 0.1, cache: &mut cache };
+        model.contacts(&start, &end, &mut Vec::new());
+        // The "remesh": every other particle is dropped, and a new one is made between each kept
+        // particle and the next (some of them inside the ball), from the kept one.
+        let kept: Vec<usize> = (0..end.len()).step_by(2).collect();
+        let mut sources = Vec::new();
+        let mut now = Vec::new();
+        for (n, &k) in kept.iter().enumerate() {
+            let next = kept[(n + 1) % kept.len()];
+            sources.extend([k as u32, k as u32]);
+            now.extend([end[k], 0.5 * (end[k] + end[next])]);
+        }
+        let later: Vec<DVec3> = now.iter().map(|&p| p * 0.97).collect();
+        let contacts = |cache: &mut ClearanceCache| {
+            let mut found = Vec::new();
+            SolveContacts { colliders: &colliders, friction: 0.3, restitution: 0.1, cache }
+                .contacts(&now, &later, &mut found);
+            format!("{found:?}")
+        };
+        cache.inherit(&sources);
+        assert!(cache.clearance.iter().filter(|&&c| c > 0.01).count() > 300, "no bound worth inheriting");
+        let mut fresh = ClearanceCache::default();
+        let inherited = contacts(&mut cache);
+        assert!(inherited.matches("coordinate").count() > 100, "too few contacts to test");
+        assert_eq!(inherited, contacts(&mut fresh), "the inherited bounds hid a contact");
     }
 
     #[test]
