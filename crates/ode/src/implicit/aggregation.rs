@@ -77,7 +77,13 @@ const SMOOTHING: f64 = 0.7;
 /// (213 against 188 ms a step, one run each on a loaded machine). The grading alone is not the cause:
 /// with contact answered after the step instead of in the solve, the same remeshed drape (radius 4)
 /// needs 3.6–4.2 iterations a solve from 0.5 to 0.75 s (2 400–2 800 particles), the uniform one 3.1–3.7.
-/// It is the filtered rigid modes of large aggregates over a graded contact zone that fall short.
+/// Contact in the solve over a graded mesh is what costs, and further runs of that drape narrow it
+/// down without finding the cure: the remeshing itself is not the cause (the mesh of 0.45 s kept
+/// unchanged to 0.75 s, 1 866 particles: 15.3 a solve); nor is friction's sticking (frictionless:
+/// 10.7); nor aggregates that straddle contact and free particles (aggregates grown only within the
+/// one kind, as the step's first solve finds them: 23.4 against 23.2). The first Newton iteration of a
+/// step takes 1–10 iterations, the later ones 20–120; the residual CG leaves after six iterations lies
+/// on free particles of ordinary mass, not on those in contact nor on the lightest or heaviest.
 /// Issue #42 keeps the question.
 pub(crate) const RADIUS: usize = 4;
 
