@@ -17,8 +17,6 @@
 //! that left its bounds) is kept in a list that every query reads instead, and a query whose box spans
 //! more reads every live face, so the guard's memory and work stay bounded on any mesh.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 
 use super::mesh::AdaptiveMesh;
@@ -27,17 +25,30 @@ use crate::self_contact::segment_crosses_triangle;
 /// The most grid cells a face is entered in, or a query reads.
 pub(crate) const MAX_CELLS: usize = 512;
 
-/// The faces of a mesh in cubic cells of their world boxes.
+/// The faces of a mesh in cubic cells of their world boxes, hashed into buckets, each bucket a list
+/// threaded through `entries` from `head` (a face is in the bucket of each of its cells; cells that
+/// share a bucket share its list, and the queries' box test sorts them out). Built afresh on every
+/// pass into the buffers of the last, and faces are added in place: a remesh each step allocates
+/// nothing here once they have grown.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct CrossingGuard {
+    /// Whether flips and collapses are checked ([`AdaptiveMesh::guard_crossings`]).
+    pub(crate) on: bool,
     cell: f64,
-    cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Per bucket, its last entry (or [`END`]).
+    head: Vec<u32>,
+    /// (face, the bucket's entry before this one).
+    entries: Vec<(u32, u32)>,
     /// Faces whose boxes span more than [`MAX_CELLS`] cells.
     large: Vec<u32>,
     /// Operations refused since the guard was built.
     pub(crate) refused: usize,
     faces: Vec<u32>,
+    lengths: Vec<f64>,
 }
+
+/// The end of a bucket's list.
+const END: u32 = u32::MAX;
 
 impl CrossingGuard {
     /// The cells of a box, or `None` when they are more than [`MAX_CELLS`].
@@ -55,13 +66,31 @@ impl CrossingGuard {
         )
     }
 
+    /// The bucket of a cell (a fixed hash: the same buckets on every run).
+    fn bucket(&self, key: [i64; 3]) -> usize {
+        let h = (key[0] as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (key[1] as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+            ^ (key[2] as u64).wrapping_mul(0x1656_67B1_9E37_79F9);
+        ((h ^ (h >> 29)) as usize) & (self.head.len() - 1)
+    }
+
+    /// Empties the guard into `buckets` buckets (a power of two).
+    fn clear(&mut self, buckets: usize) {
+        self.head.clear();
+        self.head.resize(buckets, END);
+        self.entries.clear();
+        self.large.clear();
+    }
+
     /// Adds face `f` with corners `p`.
-    pub(crate) fn insert(&mut self, f: u32, p: [DVec3; 3]) {
+    fn insert(&mut self, f: u32, p: [DVec3; 3]) {
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         match self.keys(lo, hi) {
             Some(keys) => {
                 for key in keys {
-                    self.cells.entry(key).or_default().push(f);
+                    let b = self.bucket(key);
+                    self.entries.push((f, self.head[b]));
+                    self.head[b] = (self.entries.len() - 1) as u32;
                 }
             }
             None => self.large.push(f),
@@ -74,30 +103,29 @@ impl AdaptiveMesh {
     /// change) or off. While it is on, [`AdaptiveMesh::flip_edge`] and [`AdaptiveMesh::collapse_edge`]
     /// refuse with [`super::OpError::Crossing`] an operation that would make the cloth cross itself.
     pub fn guard_crossings(&mut self, on: bool) {
-        if !on {
-            self.crossing_guard = None;
-            return;
-        }
-        // Cells of the median edge: torn faces (a run that left its bounds) do not make them large.
-        let mut lengths: Vec<f64> = self
-            .live_faces()
-            .flat_map(|f| {
+        let mut g = self.crossing_guard.take().unwrap_or_default();
+        g.on = on;
+        g.refused = 0;
+        if on {
+            // Cells of the median edge: torn faces (a run that left its bounds) do not make them large.
+            g.lengths.clear();
+            g.lengths.extend(self.live_faces().flat_map(|f| {
                 let [a, b, c] = self.corners(f);
                 [a.distance(b), b.distance(c), c.distance(a)]
-            })
-            .collect();
-        let cell = if lengths.is_empty() {
-            1.0
-        } else {
-            let mid = lengths.len() / 2;
-            *lengths.select_nth_unstable_by(mid, f64::total_cmp).1
-        };
-        let mut guard =
-            CrossingGuard { cell: if cell > 1e-9 { cell } else { 1e-9 }, ..CrossingGuard::default() };
-        for f in self.live_faces() {
-            guard.insert(f, self.corners(f));
+            }));
+            let cell = if g.lengths.is_empty() {
+                1.0
+            } else {
+                let mid = g.lengths.len() / 2;
+                *g.lengths.select_nth_unstable_by(mid, f64::total_cmp).1
+            };
+            g.cell = if cell > 1e-9 { cell } else { 1e-9 };
+            g.clear((2 * self.n_faces()).next_power_of_two().max(64));
+            for f in self.live_faces() {
+                g.insert(f, self.corners(f));
+            }
         }
-        self.crossing_guard = Some(Box::new(guard));
+        self.crossing_guard = Some(g);
     }
 
     fn corners(&self, f: u32) -> [DVec3; 3] {
@@ -107,8 +135,10 @@ impl AdaptiveMesh {
     /// Adds faces made by an operation to the guard, when it is on.
     pub(crate) fn guard_new_faces(&mut self, faces: std::ops::Range<u32>) {
         if let Some(mut g) = self.crossing_guard.take() {
-            for f in faces {
-                g.insert(f, self.corners(f));
+            if g.on {
+                for f in faces {
+                    g.insert(f, self.corners(f));
+                }
             }
             self.crossing_guard = Some(g);
         }
@@ -119,7 +149,7 @@ impl AdaptiveMesh {
     /// (the old faces crossed as many) do not refuse an operation: the remesh makes none, and it may go
     /// on where the cloth already crosses itself.
     pub(crate) fn would_cross(&mut self, old: &[u32], new: &[[u32; 3]]) -> bool {
-        let Some(mut g) = self.crossing_guard.take() else { return false };
+        let Some(mut g) = self.crossing_guard.take_if(|g| g.on) else { return false };
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for tri in new {
             for p in tri.map(|i| self.x[i as usize]) {
@@ -132,8 +162,13 @@ impl AdaptiveMesh {
         match g.keys(lo, hi) {
             Some(keys) => {
                 for key in keys {
-                    if let Some(fs) = g.cells.get(&key) {
-                        g.faces.extend(fs.iter().filter(|f| outside(f)));
+                    let mut e = g.head[g.bucket(key)];
+                    while e != END {
+                        let (f, next) = g.entries[e as usize];
+                        if outside(&f) {
+                            g.faces.push(f);
+                        }
+                        e = next;
                     }
                 }
                 g.faces.extend(g.large.iter().filter(|f| outside(f)));
@@ -264,7 +299,7 @@ mod tests {
         mesh.guard_crossings(true);
         let g = mesh.crossing_guard.as_ref().unwrap();
         assert_eq!(g.large, vec![2]);
-        assert!(g.cells.values().map(Vec::len).sum::<usize>() <= 2 * MAX_CELLS);
+        assert!(g.entries.len() <= 2 * MAX_CELLS);
         assert_eq!(mesh.flip_edge(0, 2, &guards), Err(OpError::Crossing));
     }
 }

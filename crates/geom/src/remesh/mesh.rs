@@ -144,7 +144,8 @@ pub struct AdaptiveMesh {
     pub(crate) log: ChangeLog,
     /// Scratch for fan walks and replacements, kept to avoid allocating per operation.
     pub(crate) scratch: Scratch,
-    /// While on ([`AdaptiveMesh::guard_crossings`]), what flips and collapses check against.
+    /// What flips and collapses check against while it is on ([`AdaptiveMesh::guard_crossings`]),
+    /// kept while off for its buffers.
     pub(crate) crossing_guard: Option<Box<super::crossing_guard::CrossingGuard>>,
 }
 
