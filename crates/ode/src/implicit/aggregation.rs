@@ -37,8 +37,36 @@ use super::cg::Preconditioner;
 use super::cholesky::SparseSolver;
 use super::system::{Filter, SystemMatrix};
 
-/// The damping ω of the block-Jacobi smoothing sweeps (as in [`super::two_level`]).
+/// The damping ω of the block-Jacobi smoothing sweeps (as in [`super::two_level`]), unless the system
+/// needs less ([`SMOOTHING_BOUND`]).
 const SMOOTHING: f64 = 0.7;
+
+/// The most ω λ̂ may be with ω = [`SMOOTHING`], λ̂ the estimated largest eigenvalue of J⁻¹A; above it ω
+/// is [`SMOOTHING_TARGET`]/λ̂. Why: a sweep z ← z + ω J⁻¹ (r − A z) multiplies the error's component
+/// along an eigenvector of J⁻¹A by 1 − ω λ, so it grows once ω λ > 2, and the two-level cycle around it
+/// is then worse than no coarse level at all. With springs of positive weight only λ ≤ 2 (the standard
+/// sheet); the bending elements' negative weights lift it: λ̂ reached 1.96–1.98 on the theses' 17²
+/// drapes at 1/60 s, 2.71 on Test III's sphere with contact after the step, 2.30 on the 33² membrane
+/// sheet, 2.62 on the 65² drapes, 2.80 on the 129² ones and 2.82 on the 257² Bunny's first 0.5 s
+/// (`anima run` on the shipped scenes). 0.7 contracts on all of them, and they keep their bits. A mesh
+/// graded by remeshing reaches 3.3, where 0.7 amplifies. Measured on the Bunny drape at 1/60 s (contact
+/// in the solve, modern self-collision) started at 17² and remeshed after every step by the sizing
+/// field (1.56 cm, about 2 250 particles), CG iterations a solve from 0.5 to 0.75 s: ω = 0.7 23.2, more
+/// than block Jacobi without a coarse level (8.9); ω λ̂ = 1.9 6.1, 1.6 3.3, 1.4 4.1; ω = 0.5 3.9 (the
+/// uniform 65² drape: 3.5 with 0.7, 3.7 with 0.5). The bound is the hard one, 2: a lower one (1.9 was
+/// tried) would also change the 129² and 257² drapes, whose 0.7 still contracts and whose reports were
+/// measured with it.
+const SMOOTHING_BOUND: f64 = 2.0;
+
+/// ω λ̂ where [`SMOOTHING_BOUND`] lowers ω (the best of 1.9, 1.6 and 1.4 measured, see there).
+const SMOOTHING_TARGET: f64 = 1.6;
+
+/// Power iterations for λ̂ from a fixed start (a new pattern, or the first set-up), and from the last
+/// estimate's vector every [`ESTIMATE_EVERY`] set-ups after, so that λ̂ follows a cloth that folds and
+/// touches.
+const FRESH_ITERATIONS: usize = 12;
+const WARM_ITERATIONS: usize = 2;
+const ESTIMATE_EVERY: usize = 8;
 
 /// Breadth-first hops that grow an aggregate. On the standard sheet (N = 64, whose pattern includes the
 /// skip-one bend springs) radius 3 makes 163 aggregates of about 25 particles (978 coarse unknowns),
@@ -50,8 +78,11 @@ const SMOOTHING: f64 = 0.7;
 /// rule: radius 1 needed 7.9 iterations and 6 ms per factorisation, radius 2 10.8 and 2.5 ms, radius
 /// 3 13.6 and 1.7 ms.)
 ///
-/// On a graded mesh hops are a poor measure, and none of the aggregations tried there keeps CG's count
-/// as low as on a uniform mesh without a coarse level nearly as large as the fine one. Measured on the
+/// On a graded mesh radius 4 serves as well, once the smoothing is damped enough for it
+/// ([`SMOOTHING_BOUND`]): 3.3 CG iterations a solve on the remeshed Bunny drape below, as on the
+/// uniform one. Before that, with ω = 0.7 amplifying that mesh's stiffest modes, the aggregations below
+/// were tried in search of the cause, and none kept CG's count as low as on a uniform mesh without a
+/// coarse level nearly as large as the fine one. Measured on the
 /// Bunny drape at 1/60 s (contact in the solve, modern self-collision) started at 17² and remeshed after
 /// every step by the sizing field down to the 65² drape's spacing (about 2 200 particles by 0.7 s), CG
 /// iterations per solve over the steps to 0.75 s, against the uniform 65² drape (4 225 particles) at
@@ -77,14 +108,10 @@ const SMOOTHING: f64 = 0.7;
 /// (213 against 188 ms a step, one run each on a loaded machine). The grading alone is not the cause:
 /// with contact answered after the step instead of in the solve, the same remeshed drape (radius 4)
 /// needs 3.6–4.2 iterations a solve from 0.5 to 0.75 s (2 400–2 800 particles), the uniform one 3.1–3.7.
-/// Contact in the solve over a graded mesh is what costs, and further runs of that drape narrow it
-/// down without finding the cure: the remeshing itself is not the cause (the mesh of 0.45 s kept
-/// unchanged to 0.75 s, 1 866 particles: 15.3 a solve); nor is friction's sticking (frictionless:
-/// 10.7); nor aggregates that straddle contact and free particles (aggregates grown only within the
-/// one kind, as the step's first solve finds them: 23.4 against 23.2). The first Newton iteration of a
-/// step takes 1–10 iterations, the later ones 20–120; the residual CG leaves after six iterations lies
-/// on free particles of ordinary mass, not on those in contact nor on the lightest or heaviest.
-/// Issue #42 keeps the question.
+/// Nor was it the remeshing (the mesh of 0.45 s kept to 0.75 s: 15.3 a solve), friction's sticking
+/// (frictionless: 10.7), or aggregates that straddle contact and free particles (grown within one kind:
+/// 23.4). Block Jacobi alone took 8.9, fewer than with the coarse level: the smoothing, not the
+/// aggregates, was at fault.
 pub(crate) const RADIUS: usize = 4;
 
 /// Block-Jacobi sweeps before and after the coarse correction. Two sweeps cut the CG iterations by a
@@ -153,6 +180,12 @@ pub(crate) struct RigidAggregation<C: Coord> {
     projected: Vec<bool>,
     /// Coarse factorisations so far.
     pub factorizations: usize,
+    /// The smoothing sweeps' damping ω, from λ̂ ([`SMOOTHING_BOUND`]).
+    omega: f64,
+    /// The power iteration's vector (the dominant eigenvector of J⁻¹A as last estimated) and the
+    /// set-ups since that estimate.
+    power: Vec<C>,
+    since_estimate: usize,
 }
 
 const NONE: u32 = u32::MAX;
@@ -466,7 +499,14 @@ impl<C: Coord> Clone for RigidAggregation<C> {
     /// Newton iteration, so a clone taken between a step's Newton iterations can differ in round-off.
     /// Clones taken between steps step exactly as the original.
     fn clone(&self) -> Self {
-        Self::new(self.radius, self.sweeps)
+        let mut clone = Self::new(self.radius, self.sweeps);
+        // What the smoothing's estimate depends on, so that the clone's ω follows the original's.
+        clone.pattern.clone_from(&self.pattern);
+        clone.fixed.clone_from(&self.fixed);
+        clone.omega = self.omega;
+        clone.power.clone_from(&self.power);
+        clone.since_estimate = self.since_estimate;
+        clone
     }
 }
 
@@ -511,6 +551,9 @@ impl<C: Coord> RigidAggregation<C> {
             projector: Vec::new(),
             projected: Vec::new(),
             factorizations: 0,
+            omega: SMOOTHING,
+            power: Vec::new(),
+            since_estimate: 0,
         }
     }
 
@@ -697,9 +740,11 @@ impl<C: Coord> RigidAggregation<C> {
         filter: Filter<'_, C>,
     ) -> Result<(), String> {
         let n = masses.len();
-        if self.solver.is_none() || self.pattern != pattern || self.fixed != prescribed {
+        let new_pattern = self.pattern != pattern || self.fixed != prescribed;
+        if self.solver.is_none() || new_pattern {
             self.aggregate(pattern, prescribed)?;
         }
+        self.estimate_smoothing(a, pattern, filter, new_pattern);
         // In spring form the diagonal's scalar part (the mass, and what the system adds to it) is what
         // the coarse level weighs, and the levers are taken about its centres.
         let masses = if a.spring_form { &a.masses[..] } else { masses };
@@ -767,6 +812,59 @@ impl<C: Coord> RigidAggregation<C> {
             self.galerkin_blocks(a, pattern);
         }
         self.factorize_coarse()
+    }
+
+    /// Sets ω from λ̂, the largest eigenvalue of S J⁻¹ A (J the filtered diagonal blocks the smoothing
+    /// uses), by power iteration: afresh for a new pattern, warm every [`ESTIMATE_EVERY`] set-ups
+    /// otherwise. Serial sums and the product's own bits: the same ω on any thread count.
+    fn estimate_smoothing(
+        &mut self,
+        a: &SystemMatrix<C>,
+        pattern: &[(u32, u32)],
+        filter: Filter<'_, C>,
+        new_pattern: bool,
+    ) {
+        let n = a.jacobi.len();
+        let fresh = new_pattern || self.power.len() != n;
+        self.since_estimate += 1;
+        if !fresh && self.since_estimate < ESTIMATE_EVERY {
+            return;
+        }
+        self.since_estimate = 0;
+        if fresh {
+            self.power.clear();
+            self.power.extend((0..n).map(|i| {
+                let mut v = C::default();
+                for k in 0..C::DIM {
+                    v.set_component(k, (1.0 + (7 * i + 3 * k) as f64).sin());
+                }
+                filter.one(i, v)
+            }));
+        }
+        let norm = |v: &[C]| v.iter().map(|c| c.dot(*c)).sum::<f64>().sqrt();
+        let mut w = std::mem::take(&mut self.az);
+        w.resize(n, C::default());
+        let mut lambda = 0.0;
+        for _ in 0..if fresh { FRESH_ITERATIONS } else { WARM_ITERATIONS } {
+            let nv = norm(&self.power);
+            if !(nv > 0.0 && nv.is_finite()) {
+                break;
+            }
+            a.mul(pattern, filter, &self.power, &mut w);
+            for (i, w) in w.iter_mut().enumerate() {
+                *w = filter.one(i, C::block_mul(a.jacobi[i], *w));
+            }
+            let nw = norm(&w);
+            if !(nw > 0.0 && nw.is_finite()) {
+                break;
+            }
+            lambda = nw / nv;
+            for (v, w) in self.power.iter_mut().zip(&w) {
+                *v = *w * (1.0 / nw);
+            }
+        }
+        self.az = w;
+        self.omega = if SMOOTHING * lambda > SMOOTHING_BOUND { SMOOTHING_TARGET / lambda } else { SMOOTHING };
     }
 
     /// S B S' as a block, for the projectors of coordinates `i` and `j` (identity where not projected).
@@ -1003,13 +1101,14 @@ impl<C: Coord> Preconditioner<C> for RigidAggregation<C> {
         z: &mut [C],
     ) {
         let mut az = std::mem::take(&mut self.az);
+        let omega = self.omega;
         // z += ω S J⁻¹ (r − A z), or z = ω S J⁻¹ r from z = 0 (`first`).
         let smooth = |z: &mut [C], az: &[C], first: bool| {
             parallel::for_chunks(z, |s, z| {
                 for (k, z) in z.iter_mut().enumerate() {
                     let i = s + k;
                     let residual = if first { r[i] } else { r[i] - az[i] };
-                    let step = filter.one(i, C::block_mul(a.jacobi[i], residual)) * SMOOTHING;
+                    let step = filter.one(i, C::block_mul(a.jacobi[i], residual)) * omega;
                     *z = if first { step } else { *z + step };
                 }
             });
@@ -1152,6 +1251,126 @@ mod tests {
         for (p, q) in y1.iter().zip(&y2) {
             assert!((*p - *q).length() < 1e-12 * (1.0 + q.length()), "{p} {q}");
         }
+    }
+
+    /// Where damped block Jacobi at ω = 0.7 would amplify the stiffest modes (ω λ > 2, λ the largest
+    /// eigenvalue of J⁻¹A), ω is lowered to 1.6/λ̂, and CG with the two-level cycle needs fewer
+    /// iterations than with block Jacobi alone, where at 0.7 it needed more (as on the remeshed drape
+    /// of [`SMOOTHING_BOUND`]). The system is a bending energy's, M + (L²) ⊗ I with L the grid's
+    /// Laplacian: its pairs two apart have negative weight, which lifts λ to 3.15 (with positive weights
+    /// alone λ ≤ 2). On the plain spring grid ω stays 0.7.
+    #[test]
+    fn the_smoothing_is_damped_where_block_jacobi_would_amplify() {
+        let (a, pattern, masses, prescribed, x) = spring_system_of(10);
+        let plain_lambda = largest_eigenvalue(&a, &pattern);
+        let mut plain = RigidAggregation::<DVec3>::new(1, 1);
+        plain.update(&a, &pattern, &masses, &prescribed, &x, Filter::None).unwrap();
+        assert!(SMOOTHING * plain_lambda < SMOOTHING_BOUND, "the plain grid's λ is {plain_lambda}");
+        assert_eq!(plain.omega, SMOOTHING);
+        let masses: Vec<f64> = masses.iter().map(|m| 0.01 * m).collect();
+        let (a, pattern) = bending_system(10, &masses);
+        let n = masses.len();
+        let lambda = largest_eigenvalue(&a, &pattern);
+        assert!(SMOOTHING * lambda > 2.0, "the test needs ω = 0.7 to amplify: λ = {lambda}");
+        let mut agg = RigidAggregation::<DVec3>::new(2, 1);
+        agg.update(&a, &pattern, &masses, &prescribed, &x, Filter::Prescribed(&prescribed)).unwrap();
+        // A sweep that contracts every mode, with its stiffest near the target (the power iteration's
+        // λ̂ falls short of λ by a few per cent).
+        let damping = agg.omega * lambda;
+        assert!(damping > 0.95 * SMOOTHING_TARGET && damping < SMOOTHING_BOUND, "ω λ = {damping}");
+        // Conjugate gradients to a relative residual of 10⁻⁸ with the cycle, and with block Jacobi.
+        let filter = Filter::Prescribed(&prescribed);
+        let mut b: Vec<DVec3> = (0..n).map(|i| DVec3::new(1.0, -0.5, 0.25) * (i as f64).cos()).collect();
+        filter.apply(&mut b);
+        let solve = |precond: &mut dyn Preconditioner<DVec3>| {
+            let mut x = vec![DVec3::ZERO; n];
+            let mut buffers = super::super::cg::CgBuffers::default();
+            let outcome =
+                super::super::cg::pcg(&a, &pattern, filter, precond, &b, &mut x, &mut buffers, 1e-8, 1000);
+            assert!(outcome.converged);
+            outcome.iterations
+        };
+        let damped = solve(&mut agg);
+        let jacobi = solve(&mut super::super::cg::BlockJacobi);
+        agg.omega = SMOOTHING;
+        let undamped = solve(&mut agg);
+        assert!(
+            damped < jacobi && jacobi < undamped,
+            "CG iterations: {damped} with ω = 1.6/λ̂, {undamped} with 0.7, {jacobi} without a coarse level"
+        );
+    }
+
+    /// M + (L²) ⊗ I in spring form on an n × n grid, L the Laplacian of its rows and columns: pairs
+    /// one apart weigh 8 (fewer at the border), pairs two apart along a row or column −1 and diagonal
+    /// pairs −2.
+    fn bending_system(n: usize, masses: &[f64]) -> (SystemMatrix<DVec3>, Vec<(u32, u32)>) {
+        let count = n * n;
+        let mut l = vec![vec![0.0f64; count]; count];
+        for j in 0..n {
+            for i in 0..n {
+                let p = j * n + i;
+                for (q, ok) in [(p + 1, i + 1 < n), (p + n, j + 1 < n)] {
+                    if ok {
+                        l[p][q] -= 1.0;
+                        l[q][p] -= 1.0;
+                        l[p][p] += 1.0;
+                        l[q][q] += 1.0;
+                    }
+                }
+            }
+        }
+        let mut pattern = Vec::new();
+        let mut a = SystemMatrix::<DVec3>::new();
+        a.springs.clear();
+        for p in 0..count {
+            for q in p + 1..count {
+                let entry: f64 = (0..count).map(|k| l[p][k] * l[k][q]).sum();
+                if entry != 0.0 {
+                    pattern.push((p as u32, q as u32));
+                    a.springs.push(super::super::SpringBlock {
+                        i: p as u32,
+                        j: q as u32,
+                        u: DVec3::ZERO,
+                        a: -entry,
+                    });
+                }
+            }
+        }
+        a.resize(count, &pattern);
+        a.spring_form = true;
+        for (e, s) in a.springs.clone().iter().enumerate() {
+            let b = DVec3::block_identity(s.a);
+            a.off[e] = DVec3::block_combine(b, -1.0, b, 0.0);
+            for k in [s.i, s.j] {
+                a.diag[k as usize] = DVec3::block_combine(a.diag[k as usize], 1.0, b, 1.0);
+            }
+        }
+        a.add_masses(masses, &vec![0.0; count]);
+        (a, pattern)
+    }
+
+    /// λ_max(J⁻¹A) by 300 power iterations.
+    fn largest_eigenvalue(a: &SystemMatrix<DVec3>, pattern: &[(u32, u32)]) -> f64 {
+        let n = a.jacobi.len();
+        let mut v: Vec<DVec3> =
+            (0..n).map(|i| DVec3::new(1.0, (i as f64).sin(), (2.0 * i as f64).cos())).collect();
+        let mut w = vec![DVec3::ZERO; n];
+        let mut lambda = 0.0;
+        for _ in 0..300 {
+            a.mul(pattern, Filter::None, &v, &mut w);
+            for i in 0..n {
+                w[i] = DVec3::block_mul(a.jacobi[i], w[i]);
+            }
+            let (nv, nw) = (
+                v.iter().map(|c| c.length_squared()).sum::<f64>().sqrt(),
+                w.iter().map(|c| c.length_squared()).sum::<f64>().sqrt(),
+            );
+            lambda = nw / nv;
+            for i in 0..n {
+                v[i] = w[i] / nw;
+            }
+        }
+        lambda
     }
 
     /// The coarse matrix equals (S R)ᵀ A (S R) computed column by column from products with A: with
