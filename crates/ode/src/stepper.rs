@@ -198,6 +198,7 @@ impl<C: Coord> Stepper<C> {
             to.newton_iterations = from.newton_iterations;
             to.newton_contraction = from.newton_contraction;
             to.regime_iterations = from.regime_iterations;
+            to.bounded_smoothing = from.bounded_smoothing;
             to.contact.friction_model = from.contact.friction_model;
             if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
                 b.params = a.params;
@@ -285,6 +286,17 @@ impl<C: Coord> Stepper<C> {
     pub fn set_regime_iterations(&mut self, iterations: usize) {
         if let Some(ws) = &mut self.implicit {
             ws.regime_iterations = iterations;
+        }
+    }
+
+    /// Whether the rigid-aggregation preconditioner (generalised-α's default solver) damps its
+    /// block-Jacobi smoothing by an estimate of the system's largest eigenvalue, so that the smoothing
+    /// never amplifies the stiffest modes (off by default; the measurements and the reason are at
+    /// `implicit::aggregation::SMOOTHING_BOUND`). A cloth mesh graded by remeshing needs it: its bending
+    /// elements lift that eigenvalue past what the fixed damping allows. No effect on other solvers.
+    pub fn set_bounded_smoothing(&mut self, on: bool) {
+        if let Some(ws) = &mut self.implicit {
+            ws.bounded_smoothing = on;
         }
     }
 

@@ -68,6 +68,9 @@ pub(crate) struct ImplicitWorkspace<C: Coord> {
     /// solve (at the first solve of every step).
     pub(super) positions: Vec<C>,
     pub(super) coarse_stale: bool,
+    /// Whether the rigid aggregation's smoothing is damped by its estimated largest eigenvalue
+    /// ([`crate::Stepper::set_bounded_smoothing`]).
+    pub bounded_smoothing: bool,
     /// BDF2 only: the state one step back, and the step that led from it (0 when there is none).
     pub(super) bdf2: Option<State<C>>,
     pub(super) prev_h: f64,
@@ -109,6 +112,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             aggregation: None,
             positions: Vec::new(),
             coarse_stale: true,
+            bounded_smoothing: false,
             bdf2: bdf2.then(|| State::zeros(n)),
             prev_h: 0.0,
             w: zeros(),
@@ -230,6 +234,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             #[cfg(feature = "sparse-cholesky")]
             LinearSolver::RigidAggregation { tolerance, max_iterations } => {
                 let agg = self.aggregation.get_or_insert_with(Default::default);
+                agg.bounded = self.bounded_smoothing;
                 if self.positions.len() != masses.len() {
                     // No positions given: the rotations turn about the origin, which still spans them.
                     self.positions.clear();
