@@ -876,8 +876,11 @@ impl OliveiraCloth {
         self.clearance = vec![0.0; n];
         self.responded = vec![false; n];
         match sources {
-            Some(sources) if sources.len() == n => self.solve_cache.inherit(sources),
-            _ => self.solve_cache.reset(n),
+            Some(sources) => {
+                debug_assert_eq!(sources.len(), n, "one source per new particle");
+                self.solve_cache.inherit(sources);
+            }
+            None => self.solve_cache.reset(n),
         }
         self.tracked = tracked;
         self.repelled_edges.clear();
