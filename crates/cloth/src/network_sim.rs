@@ -441,9 +441,9 @@ impl NetworkSim {
             && self.self_collision.is_none()
     }
 
-    /// Threads [`NetworkSim::run`] uses ([`SpringNetwork::threads`]).
+    /// Threads [`NetworkSim::run`] uses ([`SpringNetwork::thread_count`]).
     pub fn threads(&self) -> usize {
-        self.network.threads(self.fuses())
+        self.network.thread_count(self.fuses())
     }
 
     /// Runs `n` steps, stopping at the first non-finite state; returns the step where it appeared.

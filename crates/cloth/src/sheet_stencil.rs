@@ -17,7 +17,6 @@
 //! order, so the same bits.
 
 use anima_geom::DVec3;
-#[cfg(feature = "parallel")]
 use banded::Bands;
 
 #[derive(Debug, Clone)]
@@ -40,7 +39,6 @@ pub(crate) struct GridStencil {
     /// The best instruction set of this machine, found once.
     arch: pulp::Arch,
     /// The rows split into bands, one per thread, for a parallel symplectic-Euler run.
-    #[cfg(feature = "parallel")]
     bands: Bands,
 }
 
@@ -78,7 +76,6 @@ impl GridStencil {
             ring: vec![0.0; ring_len(&classes, n)],
             classes,
             arch: pulp::Arch::new(),
-            #[cfg(feature = "parallel")]
             bands: Bands::default(),
         }
     }
@@ -122,13 +119,7 @@ impl GridStencil {
         self.load(x, v, false);
         self.saved_pos.clone_from(&self.pos);
         self.saved_vel.clone_from(&self.vel);
-        #[cfg(feature = "parallel")]
         let banded = parallel && self.run_banded(steps, h, particles, x, v);
-        #[cfg(not(feature = "parallel"))]
-        let banded = {
-            let _ = parallel;
-            false
-        };
         if !banded {
             for _ in 0..steps {
                 self.symplectic_euler_step(h, particles);
@@ -154,24 +145,20 @@ impl GridStencil {
 
     /// Splits the banded run into `count` bands whatever the machine's cores (tests: a band with
     /// neighbours on both sides needs at least three).
-    #[cfg(all(test, feature = "parallel"))]
+    #[cfg(test)]
     pub fn set_bands(&mut self, count: usize) {
         self.bands.count = Some(count);
     }
 
     /// Threads [`GridStencil::run_symplectic_euler`] uses with `parallel`: one per band of rows.
     pub fn fused_threads(&self) -> usize {
-        #[cfg(feature = "parallel")]
-        return banded::band_count(self.n);
-        #[cfg(not(feature = "parallel"))]
-        1
+        banded::band_count(self.n)
     }
 
     /// Runs the steps on all cores, each thread moving a band of rows, from the rows in `pos` and `vel`,
     /// into (x, v): the same operations on every row as [`GridStencil::symplectic_euler_step`], so the
     /// same bits. Returns false, having done nothing, when the machine has one core or the sheet too few
     /// rows to share.
-    #[cfg(feature = "parallel")]
     fn run_banded(
         &mut self,
         steps: usize,
@@ -593,31 +580,26 @@ fn flat_end<'a>(
 /// Threads the per-pass parallel evaluation ([`GridStencil::add_forces`] with `parallel`) uses: the
 /// rayon pool's.
 pub(crate) fn pool_threads() -> usize {
-    #[cfg(feature = "parallel")]
-    return rayon::current_num_threads();
-    #[cfg(not(feature = "parallel"))]
-    1
+    rayon::current_num_threads()
 }
 
 fn all_finite(x: &[DVec3], v: &[DVec3]) -> bool {
     x.iter().zip(v).all(|(x, v)| x.is_finite() && v.is_finite())
 }
 
-/// Calls `body(k, chunk)` for every `size`-long chunk k of `buf`, on all cores when asked and available
-/// (the `parallel` feature). Chunks are disjoint, so the result does not depend on the order.
+/// Calls `body(k, chunk)` for every `size`-long chunk k of `buf`, on all cores when asked. Chunks are
+/// disjoint, so the result does not depend on the order.
 fn for_each_chunk<T: Send>(
     buf: &mut [T],
     size: usize,
     parallel: bool,
     body: impl Fn(usize, &mut [T]) + Sync + Send,
 ) {
-    #[cfg(feature = "parallel")]
     if parallel {
         use rayon::prelude::*;
         buf.par_chunks_mut(size).enumerate().for_each(|(k, chunk)| body(k, chunk));
         return;
     }
-    let _ = parallel;
     for (k, chunk) in buf.chunks_mut(size).enumerate() {
         body(k, chunk);
     }
@@ -638,7 +620,6 @@ fn for_each_chunk<T: Send>(
 /// microsecond, where a pool's fork and join per pass, or threads started for every run, cost more than
 /// a small sheet's pass (measured: threads started per 1/30 s frame made two threads slower than one on
 /// the 32 × 32 sheet).
-#[cfg(feature = "parallel")]
 mod banded {
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::sync::mpsc::{Receiver, Sender, channel};
@@ -1004,7 +985,7 @@ mod banded {
     }
 }
 
-#[cfg(all(test, feature = "parallel"))]
+#[cfg(test)]
 mod tests {
     use super::banded::SpinBarrier;
 

@@ -45,6 +45,50 @@ impl Spring {
     }
 }
 
+/// How many threads a network's own passes over its springs use (the explicit integrators' force
+/// evaluations and the fused symplectic-Euler run of a sheet; the implicit solves share out their work
+/// through `anima_ode::parallel` whatever this says). Every choice gives the same bits; inside
+/// `anima_ode::parallel::on_one_thread` every choice runs on the calling thread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Threads {
+    /// The calling thread only.
+    One,
+    /// Every core where it pays (the default): a sheet's fused symplectic-Euler run from
+    /// [`PARALLEL_MIN_PARTICLES_FUSED`] particles, its per-pass force evaluation from
+    /// [`PARALLEL_MIN_PARTICLES`], on a machine with more than one core.
+    #[default]
+    Auto,
+    /// Every core whatever the size (the tests of the parallel paths run them on small sheets).
+    Every,
+}
+
+/// Sheets smaller than this evaluate their forces on one thread under [`Threads::Auto`], unless stepped
+/// by the fused symplectic-Euler run ([`PARALLEL_MIN_PARTICLES_FUSED`]): the other explicit methods
+/// share out each pass over the springs on the pool, and below it two threads do not pay for their
+/// hand-over at every pass. Measured when symplectic Euler still ran that way, on this project's 2-core
+/// machine, alternating one and two threads (`anima run` with and without `--one-thread`): the standard
+/// sheet N = 64 took 3.5–3.7 s on two threads against 1.29–1.33 s on one, N = 128 0.75–0.85 s against
+/// 0.59–0.61 s, and N = 256 (65 536 particles) 2.50–2.62 s against 2.97–3.00 s, the first size where
+/// the second core pays.
+pub const PARALLEL_MIN_PARTICLES: usize = 65_536;
+
+/// Sheets stepped by the fused symplectic-Euler run ([`SpringNetwork::run_symplectic_euler`]) use every
+/// core from this size under [`Threads::Auto`]: that run keeps its threads between steps, with a spin
+/// barrier between its two phases, so the second core pays much earlier. Measured on the 2-core
+/// machine, alternating, three runs each (`anima run` loop times): the standard sheet N = 32 (1 024
+/// particles) at 2·10⁻⁴ s took 0.13–0.14 s on two threads against 0.17–0.19 s on one, N = 64 at
+/// 10⁻⁴ s 0.71–0.73 s against 1.12–1.13 s.
+pub const PARALLEL_MIN_PARTICLES_FUSED: usize = 1_024;
+
+/// The size from which a sheet stepped with `integrator` uses every core under [`Threads::Auto`].
+pub fn parallel_min_particles(integrator: anima_ode::Integrator) -> usize {
+    if integrator == anima_ode::Integrator::SymplecticEuler {
+        PARALLEL_MIN_PARTICLES_FUSED
+    } else {
+        PARALLEL_MIN_PARTICLES
+    }
+}
+
 /// Particles, springs, pins and gravity. Pinned particles keep their velocity (zero unless set).
 #[derive(Debug, Clone)]
 pub struct SpringNetwork {
@@ -59,9 +103,9 @@ pub struct SpringNetwork {
     pub definite_jacobians: bool,
     /// For sheets built by [`SheetSpec::build`]: the springs as stencils on the grid, the fast path.
     stencil: Option<GridStencil>,
-    /// Evaluate the stencil rows on all cores (with the `parallel` feature); the result is
-    /// bit-identical to the serial one.
-    pub parallel: bool,
+    /// How many threads the sheet's stencil passes use ([`Threads`]; every core where it pays unless
+    /// set); the result is bit-identical whatever it is.
+    pub threads: Threads,
     /// Each spring's ends as it is oriented (its force acts on `.0`), and the implicit assembly that
     /// shares the springs out over the threads.
     ends: Vec<(u32, u32)>,
@@ -129,7 +173,7 @@ impl SpringNetwork {
             gravity,
             definite_jacobians: true,
             stencil: None,
-            parallel: false,
+            threads: Threads::Auto,
         })
     }
 
@@ -194,19 +238,37 @@ impl SpringNetwork {
     /// Adds the spring forces at (x, v) to `f`. The hot loop of a sheet step.
     #[inline]
     fn add_spring_forces(&mut self, x: &[DVec3], v: &[DVec3], f: &mut [DVec3]) {
+        let parallel = self.parallel(false);
         if let Some(stencil) = &mut self.stencil {
-            stencil.add_forces(x, v, f, self.parallel);
+            stencil.add_forces(x, v, f, parallel);
             return;
         }
         self.add_forces_by_spring(x, v, f);
     }
 
-    /// Threads a run on this network uses: 1 unless [`SpringNetwork::parallel`] is set and the network
-    /// is a sheet built by [`SheetSpec::build`]; then, for [`SpringNetwork::run_symplectic_euler`]
-    /// (`fused`), one per band of rows, else the pool's that shares out each pass over the springs.
-    pub fn threads(&self, fused: bool) -> usize {
+    /// Whether the stencil's passes run on every core: for [`SpringNetwork::run_symplectic_euler`]
+    /// (`fused`) or for each force evaluation, as [`SpringNetwork::threads`] says.
+    fn parallel(&self, fused: bool) -> bool {
+        if anima_ode::parallel::kept_on_one_thread() {
+            return false;
+        }
+        match self.threads {
+            Threads::One => false,
+            Threads::Every => true,
+            Threads::Auto => {
+                let least = if fused { PARALLEL_MIN_PARTICLES_FUSED } else { PARALLEL_MIN_PARTICLES };
+                self.n_particles() >= least && std::thread::available_parallelism().is_ok_and(|c| c.get() > 1)
+            }
+        }
+    }
+
+    /// Threads a run on this network uses: 1 unless the network is a sheet built by
+    /// [`SheetSpec::build`] whose [`SpringNetwork::threads`] setting runs it on every core; then, for
+    /// [`SpringNetwork::run_symplectic_euler`] (`fused`), one per band of rows, else the pool's that
+    /// shares out each pass over the springs.
+    pub fn thread_count(&self, fused: bool) -> usize {
         match &self.stencil {
-            Some(stencil) if self.parallel => {
+            Some(stencil) if self.parallel(fused) => {
                 if fused {
                     stencil.fused_threads()
                 } else {
@@ -237,8 +299,9 @@ impl SpringNetwork {
             pinned: &self.pinned,
             gravity: self.gravity,
         };
+        let parallel = self.parallel(true);
         let stencil = self.stencil.as_mut()?;
-        Some(stencil.run_symplectic_euler(steps, h, particles, x, v, self.parallel))
+        Some(stencil.run_symplectic_euler(steps, h, particles, x, v, parallel))
     }
 
     /// The springs' forces added spring by spring, in their order.
@@ -847,9 +910,9 @@ mod stencil_tests {
         let (reference, went) = stepped(&mut net.clone(), 2000, 1e-2, &x0, &v0);
         let went = went.expect("the step is far beyond the stable limit");
         assert!(went > 10, "non-finite only after growing for a while (step {went})");
-        // Serially and, with the `parallel` feature, in bands on every core.
-        for parallel in [false, cfg!(feature = "parallel")] {
-            net.parallel = parallel;
+        // Serially and in bands on every core.
+        for threads in [Threads::One, Threads::Every] {
+            net.threads = threads;
             let (mut x, mut v) = (x0.clone(), v0.clone());
             assert_eq!(net.run_symplectic_euler(2000, 1e-2, &mut x, &mut v), Some(Err(went)));
             // The state is the one after that step, bit for bit (NaN compared by its bits).
@@ -860,13 +923,13 @@ mod stencil_tests {
         }
     }
 
-    #[cfg(feature = "parallel")]
     #[test]
     fn parallel_fused_symplectic_euler_is_bit_identical_to_serial() {
         // 33 rows: bands of 17 and 16 on two cores, of 9, 9, 9 and 6 on four.
         let spec = SheetSpec::standard(33);
         let (mut serial, mut parallel) = (spec.build().unwrap(), spec.build().unwrap());
-        parallel.parallel = true;
+        serial.threads = Threads::One;
+        parallel.threads = Threads::Every;
         let (x0, v0) = perturbed(&spec);
         let (mut xa, mut va, mut xb, mut vb) = (x0.clone(), v0.clone(), x0, v0);
         // Two runs: the bands are kept and reloaded between them.
@@ -877,19 +940,19 @@ mod stencil_tests {
         assert_eq!((xa, va), (xb, vb));
     }
 
-    #[cfg(feature = "parallel")]
     #[test]
     fn fused_symplectic_euler_in_three_and_four_bands_is_bit_identical_to_serial() {
         // Bands of 11 rows (three) and of 9, 9, 9 and 6 (four): the middle bands read halos on both
         // sides, which two bands, all a two-core machine makes, never do.
         let spec = SheetSpec::standard(33);
         let mut serial = spec.build().unwrap();
+        serial.threads = Threads::One;
         let (x0, v0) = perturbed(&spec);
         let (mut xa, mut va) = (x0.clone(), v0.clone());
         assert_eq!(serial.run_symplectic_euler(40, 1e-4, &mut xa, &mut va), Some(Ok(())));
         for count in [3, 4] {
             let mut banded = spec.build().unwrap();
-            banded.parallel = true;
+            banded.threads = Threads::Every;
             banded.stencil.as_mut().expect("a sheet's stencil").set_bands(count);
             let (mut xb, mut vb) = (x0.clone(), v0.clone());
             assert_eq!(banded.run_symplectic_euler(40, 1e-4, &mut xb, &mut vb), Some(Ok(())));
@@ -898,11 +961,31 @@ mod stencil_tests {
     }
 
     #[test]
+    fn threads_are_a_runtime_setting_every_core_where_it_pays_by_default() {
+        let small = SheetSpec::standard(16).build().unwrap();
+        assert_eq!(small.threads, Threads::Auto);
+        assert_eq!(small.thread_count(true), 1, "256 particles: below the fused run's size");
+        let mut sheet = SheetSpec::standard(33).build().unwrap();
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        if cores > 1 {
+            assert!(sheet.thread_count(true) > 1, "1 089 particles: the fused run takes every core");
+        }
+        assert_eq!(sheet.thread_count(false), 1, "the per-pass evaluation pays only from 65 536");
+        // One switch keeps a whole run on one thread, whatever the setting.
+        sheet.threads = Threads::Every;
+        assert_eq!(anima_ode::parallel::on_one_thread(|| sheet.thread_count(true)), 1);
+        assert_eq!(anima_ode::parallel::on_one_thread(|| sheet.thread_count(false)), 1);
+        sheet.threads = Threads::One;
+        assert_eq!(sheet.thread_count(true), 1);
+    }
+
+    #[test]
     fn parallel_sheet_forces_are_bit_identical_to_serial() {
         let spec = SheetSpec::standard(33);
         let mut serial = spec.build().unwrap();
+        serial.threads = Threads::One;
         let mut parallel = spec.build().unwrap();
-        parallel.parallel = true;
+        parallel.threads = Threads::Every;
         let (x, v) = perturbed(&spec);
         let (mut a, mut b) = (vec![DVec3::ZERO; 33 * 33], vec![DVec3::ZERO; 33 * 33]);
         serial.acceleration(0.0, &x, &v, &mut a);

@@ -42,6 +42,12 @@ pub fn threads() -> usize {
     if ONE_THREAD.with(|o| o.get()) { 1 } else { rayon::current_num_threads() }
 }
 
+/// Whether the calling thread is inside [`on_one_thread`]: code with threads of its own (a sheet's
+/// banded run in `anima-cloth`) asks, so that one switch keeps a whole run on one thread.
+pub fn kept_on_one_thread() -> bool {
+    ONE_THREAD.with(|o| o.get())
+}
+
 /// Runs `f` with every parallel loop of this module on the calling thread (what `anima run
 /// --one-thread` asks for; the results are the same bits either way).
 pub fn on_one_thread<T>(f: impl FnOnce() -> T) -> T {

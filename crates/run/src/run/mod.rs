@@ -54,30 +54,9 @@ pub struct RunOptions {
     pub live: Option<crate::live::Live>,
 }
 
-/// Sheets smaller than this run on one thread even when [`RunOptions::parallel`] is set, unless stepped
-/// with symplectic Euler ([`PARALLEL_MIN_PARTICLES_FUSED`]): the other explicit methods share out each
-/// pass over the springs on the pool, and below it two threads do not pay for their hand-over at every
-/// pass. Measured when symplectic Euler still ran that way, on this project's 2-core machine,
-/// alternating one and two threads (`anima run` with and without `--one-thread`): the standard sheet N = 64 took 3.5–3.7 s on two threads against 1.29–1.33 s on one,
-/// N = 128 0.75–0.85 s against 0.59–0.61 s, and N = 256 (65 536 particles) 2.50–2.62 s against
-/// 2.97–3.00 s, the first size where the second core pays.
-pub const PARALLEL_MIN_PARTICLES: usize = 65_536;
-
-/// Sheets stepped with symplectic Euler run on every core from this size: that run is fused and keeps
-/// its threads between steps, with a spin barrier between its two phases, so the second core pays much
-/// earlier. Measured on the 2-core machine, alternating, three runs each (`anima run` loop times): the
-/// standard sheet N = 32 (1 024 particles) at 2·10⁻⁴ s took 0.13–0.14 s on two threads against
-/// 0.17–0.19 s on one, N = 64 at 10⁻⁴ s 0.71–0.73 s against 1.12–1.13 s.
-pub const PARALLEL_MIN_PARTICLES_FUSED: usize = 1_024;
-
-/// The size from which a sheet stepped with `integrator` runs on every core.
-pub fn parallel_min_particles(integrator: Integrator) -> usize {
-    if integrator == Integrator::SymplecticEuler {
-        PARALLEL_MIN_PARTICLES_FUSED
-    } else {
-        PARALLEL_MIN_PARTICLES
-    }
-}
+pub use anima_cloth::spring_net::{
+    PARALLEL_MIN_PARTICLES, PARALLEL_MIN_PARTICLES_FUSED, parallel_min_particles,
+};
 
 impl RunOptions {
     /// Nothing written: for tests and experiments that only want the numbers.

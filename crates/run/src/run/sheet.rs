@@ -7,6 +7,7 @@ use std::time::Instant;
 use anima_cloth::StepError;
 use anima_cloth::membrane::{MembraneSheetSpec, MembraneSim};
 use anima_cloth::network_sim::NetworkSim;
+use anima_cloth::spring_net::Threads;
 use anima_geom::obj::write_obj;
 use anima_geom::{Aabb, DVec3, grid_triangles};
 use anima_ode::{IntegrationError, OdeSystem, State, StepControl, Stepper, integrate};
@@ -365,9 +366,8 @@ pub(crate) fn new_cloth(scene: &SheetScene, parallel: bool) -> Result<(Cloth, Ve
             let mut net = sheet.build()?;
             // The implicit steps evaluate their forces with the system, spring by spring, on one
             // thread.
-            net.parallel = parallel
-                && sheet.n * sheet.n >= super::parallel_min_particles(scene.integrator)
-                && !scene.integrator.is_implicit();
+            net.threads =
+                if parallel && !scene.integrator.is_implicit() { Threads::Auto } else { Threads::One };
             let sim = NetworkSim::new(net, sheet.positions(), scene.integrator, scene.dt_s)?;
             (Box::new(sim), grid_triangles(sheet.n, sheet.n))
         }
