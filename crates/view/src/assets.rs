@@ -25,13 +25,17 @@ pub(crate) const EMBEDDED: &[Embedded] = &[
     // A live run's page (`anima run --live`), served at `/` in place of the player while the run goes.
     embed!("/live.html", "text/html; charset=utf-8", "live.html"),
     embed!("/live.js", JS, "live.js"),
-    embed!("/three/three.module.js", JS, "three/three.module.js"),
-    embed!("/three/three.core.js", JS, "three/three.core.js"),
-    embed!("/three/addons/loaders/GLTFLoader.js", JS, "three/addons/loaders/GLTFLoader.js"),
-    embed!("/three/addons/utils/BufferGeometryUtils.js", JS, "three/addons/utils/BufferGeometryUtils.js"),
-    embed!("/three/addons/utils/SkeletonUtils.js", JS, "three/addons/utils/SkeletonUtils.js"),
-    embed!("/three/addons/controls/OrbitControls.js", JS, "three/addons/controls/OrbitControls.js"),
-    embed!("/three/LICENSE", "text/plain; charset=utf-8", "three/LICENSE"),
+    embed!("/three/three.module.js", JS, "vendor/three/three.module.js"),
+    embed!("/three/three.core.js", JS, "vendor/three/three.core.js"),
+    embed!("/three/addons/loaders/GLTFLoader.js", JS, "vendor/three/addons/loaders/GLTFLoader.js"),
+    embed!(
+        "/three/addons/utils/BufferGeometryUtils.js",
+        JS,
+        "vendor/three/addons/utils/BufferGeometryUtils.js"
+    ),
+    embed!("/three/addons/utils/SkeletonUtils.js", JS, "vendor/three/addons/utils/SkeletonUtils.js"),
+    embed!("/three/addons/controls/OrbitControls.js", JS, "vendor/three/addons/controls/OrbitControls.js"),
+    embed!("/three/LICENSE", "text/plain; charset=utf-8", "vendor/three/LICENSE"),
 ];
 
 /// The run's files the page reads, served from the run's folder as `/run/<name>`, each with its media

@@ -8,7 +8,7 @@
 //! its spelling (`..`, `%2e%2e`, a long or odd one), because requests are matched against a fixed
 //! table, never joined to a file system path.
 //!
-//! The page and three.js (r187, MIT, `assets/three/`) are embedded in the binary (`include_bytes!`),
+//! The page and three.js (r187, MIT, `assets/vendor/three/`) are embedded in the binary (`include_bytes!`),
 //! so neither the build nor the page needs a network.
 //!
 //! Why hyper: it is the maintained HTTP/1 server that bounds a request's head (a head over
