@@ -884,6 +884,9 @@ fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
     row(&mut s, "overhand start (before the search)", "—", &start, "—", &OVERHAND_START);
     // (reading, literal fitness, overhand and through the hoop, winner) of every run.
     let mut runs: Vec<(usize, f64, bool, Vec<f64>)> = Vec::new();
+    // The literal runs' winners: (literal fitness, through the hoop, style, H_max), for why they end
+    // where they do.
+    let mut literal: Vec<(f64, bool, &'static str, f64)> = Vec::new();
     for (r, reading) in THROW_READINGS.iter().enumerate() {
         for seed in THROW_SEEDS {
             let mut optimiser = thesis.spec.optimiser.clone();
@@ -920,6 +923,9 @@ fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
             let throw = throw_with_release(base, &ids, &x)?;
             row(&mut s, reading.name, &seed.to_string(), &throw, &accepted.to_string(), &x);
             let (out, release) = throw;
+            if !reading.capped {
+                literal.push((out.fitness(), out.scored, style(release), out.h_max));
+            }
             runs.push((r, out.fitness(), out.scored && style(release) == "overhand", x));
         }
     }
@@ -934,6 +940,7 @@ fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
             mine.len()
         );
     }
+    s.push_str(&literal_outcomes(&literal, cap.expect("a cap")));
     let best =
         runs.iter().filter(|run| run.2 && !THROW_READINGS[run.0].capped).max_by(|a, b| a.1.total_cmp(&b.1));
     match best {
@@ -960,6 +967,71 @@ fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
         None => s.push_str("\nNo run on the literal Eq. 6.1 ends overhand and through the hoop.\n"),
     }
     Ok(s)
+}
+
+/// Why the searches on the literal Eq. 6.1 end where they do, from their winners (literal fitness,
+/// through the hoop, throw style, H_max): those that end overhand through the hoop; those whose ball
+/// rises above the cap `cap` (m), where the literal fitness climbs by height alone, and how many of them
+/// outrank the best overhand throw (a greedy search with strict acceptance never goes back down to it);
+/// and those that miss the hoop below the cap, where the cap changes nothing.
+fn literal_outcomes(winners: &[(f64, bool, &str, f64)], cap: f64) -> String {
+    let range = |v: &mut dyn Iterator<Item = f64>, digits: usize| {
+        let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        if hi - lo < 0.5 * 10f64.powi(-(digits as i32)) {
+            format!("{lo:.digits$}")
+        } else {
+            format!("{lo:.digits$}–{hi:.digits$}")
+        }
+    };
+    let verb = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    let overhand: Vec<_> = winners.iter().filter(|w| w.1 && w.2 == "overhand").collect();
+    let high: Vec<_> = winners.iter().filter(|w| !(w.1 && w.2 == "overhand") && w.3 > cap).collect();
+    let short: Vec<_> = winners.iter().filter(|w| !w.1 && w.3 <= cap).collect();
+    let best_overhand = overhand.iter().map(|w| w.0).fold(f64::NEG_INFINITY, f64::max);
+    let mut out = format!(
+        "\nOf the {} searches on the literal Eq. 6.1, {} overhand and through the hoop",
+        winners.len(),
+        verb(overhand.len(), "ends", "end")
+    );
+    if !overhand.is_empty() {
+        let _ = write!(out, " (literal {})", range(&mut overhand.iter().map(|w| w.0), 3));
+    }
+    let _ = write!(out, "; {} above the cap of {cap:.2} m", verb(high.len(), "throws", "throw"));
+    if !high.is_empty() {
+        let outrank = high.iter().filter(|w| overhand.is_empty() || w.0 > best_overhand).count();
+        let _ = write!(
+            out,
+            " (H_max {} m, {} underhand, {} through the hoop; literal {}), {outrank} of them above {}",
+            range(&mut high.iter().map(|w| w.3), 2),
+            high.iter().filter(|w| w.2 == "underhand").count(),
+            high.iter().filter(|w| w.1).count(),
+            range(&mut high.iter().map(|w| w.0), 3),
+            if overhand.is_empty() {
+                "every overhand throw found".to_owned()
+            } else {
+                format!("the best overhand throw's {best_overhand:.3}")
+            },
+        );
+    }
+    let _ = write!(out, "; {} the hoop below the cap", verb(short.len(), "misses", "miss"));
+    if !short.is_empty() {
+        let _ = write!(
+            out,
+            " (H_max {} m; literal {})",
+            range(&mut short.iter().map(|w| w.3), 2),
+            range(&mut short.iter().map(|w| w.0), 3)
+        );
+    }
+    let rest = winners.len() - overhand.len() - high.len() - short.len();
+    if rest > 0 {
+        let _ = write!(out, "; {rest} others");
+    }
+    out.push_str(
+        ". Above the cap the literal fitness climbs by height alone; below it the cap changes nothing. A \
+         search with strict acceptance keeps its best throw, so one that has found a throw higher-scoring \
+         than an overhand one through the hoop never goes back to it.\n",
+    );
+    out
 }
 
 /// Iterations of the backflip run (30 s): the flight ends near iteration 250; the rest is standing.
