@@ -833,7 +833,8 @@ const THROW_READINGS: [ThrowReading; 5] = [
 fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
     let base = &thesis.controller;
     let ids = base.free_params(&thesis.spec.parameters);
-    let cap = Some(nunes::throw_height_cap(&nunes::BASKET));
+    let height_cap = nunes::throw_height_cap(&nunes::BASKET);
+    let cap = Some(height_cap);
     let draws = thesis.spec.evaluations - 1;
     let mut s = String::from("\n### The thesis's search on the literal Eq. 6.1 (issue #39)\n\n");
     let _ = writeln!(
@@ -940,7 +941,7 @@ fn throw_readings(repo: &Repo, thesis: &LoadedOptimisation) -> Result<String> {
             mine.len()
         );
     }
-    s.push_str(&literal_outcomes(&literal, cap.expect("a cap")));
+    s.push_str(&literal_outcomes(&literal, height_cap));
     let best =
         runs.iter().filter(|run| run.2 && !THROW_READINGS[run.0].capped).max_by(|a, b| a.1.total_cmp(&b.1));
     match best {
