@@ -255,9 +255,11 @@ impl SpringNetwork {
         match self.threads {
             Threads::One => false,
             Threads::Every => true,
+            // On one core the banded run declines (one band) and the pool has one thread: no check
+            // here, which runs at every force evaluation.
             Threads::Auto => {
-                let least = if fused { PARALLEL_MIN_PARTICLES_FUSED } else { PARALLEL_MIN_PARTICLES };
-                self.n_particles() >= least && std::thread::available_parallelism().is_ok_and(|c| c.get() > 1)
+                self.n_particles()
+                    >= if fused { PARALLEL_MIN_PARTICLES_FUSED } else { PARALLEL_MIN_PARTICLES }
             }
         }
     }

@@ -88,7 +88,8 @@ pub fn document(repo: &Repo) -> Result<String> {
          Nunes 2006 (Table 6.3): the unoptimised walker (p₂ = p₃ = p₅ = p₆ = 0.25) falls; 15 global and 30 \
          single-parameter draws of the staged search make it walk 10.5 m in 50 s (about 0.21 m/s). anima's \
          experiments (`walk.ron`: re-authored poses, implicit springs, gains × 100, 4 physics sub-steps) walk \
-         before any search (`nunes-results.md` gives how far). This page runs the thesis's search (`assets/optimisations/walk.ron`, seed \
+         before any search (`nunes-results.md` gives how far). This page runs the thesis's search \
+         (`assets/optimisations/walk.ron`, seed \
          2006, 46 evaluations of 1000 iterations) on the humanoid under each actuation reading below, with the \
          spec's §8.1.2 poses and with the re-authored ones, and records the fitness before the search (the \
          first evaluation, p = 0.25) and the best after it, with that walker's mean speed over its run. \

@@ -415,7 +415,8 @@ fn walk_faithful(repo: &Repo) -> Result<(String, Vec<(String, f64)>)> {
          readings of the spec (ODE-style and implicit springs, G from 1 to 100, gravity scaled): with the \
          spec's §8.1.2 poses none walks before or after the search; with the re-authored poses of `walk.ron` \
          the walker falls before the search and walks after it only in a narrow band of gains (that \
-         report's \"What it shows\" lists them), and walks before it above the band. Here the thesis's search (`walk.ron`'s, seed {SEED}) runs on implicit springs with every \
+         report's \"What it shows\" lists them), and walks before it above the band. Here the thesis's \
+         search (`walk.ron`'s, seed {SEED}) runs on implicit springs with every \
          gain, cap and brake × {} (`anima_lab::nunes::faithful_character`), 4 physics sub-steps, Δt = \
          0.05 s: `assets/optimisations/walk-faithful.ron`, which `anima optimise` runs as it is. That this \
          configuration shows the before-and-after holds by construction: G was picked by the scan for it. \
