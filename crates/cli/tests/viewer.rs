@@ -217,9 +217,33 @@ impl DevTools {
 }
 
 impl Drop for DevTools {
+    /// Closes the browser as a person would (`Browser.close`), so that its helper processes end with
+    /// it and stop writing into the profile; killed only if it has not gone in 10 s.
     fn drop(&mut self) {
+        let mut close =
+            serde_json::to_vec(&serde_json::json!({ "id": 0, "method": "Browser.close" })).unwrap();
+        close.push(0);
+        if std::io::Write::write_all(&mut self.to_browser, &close).is_ok() {
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(10) {
+                if matches!(self.child.try_wait(), Ok(Some(_))) {
+                    return;
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// Removes a test's directory once the browser's last helper process has let go of its profile
+/// (a renderer can outlive the browser by a moment and write a file after the first attempt).
+fn remove_test_dir(dir: &Path) {
+    let start = Instant::now();
+    while let Err(e) = std::fs::remove_dir_all(dir) {
+        assert!(start.elapsed() < Duration::from_secs(30), "{}: {e}", dir.display());
+        std::thread::sleep(Duration::from_millis(200));
     }
 }
 
@@ -314,7 +338,7 @@ fn viewer_plays_a_sheet_and_shows_the_frame_scrubbed_to() {
     assert!((first[500][2] - run_frame[500][2]).abs() > 1e-3);
     screenshot(&viewer.url, &dir.join("profile"), 20, "sheet");
     viewer.interrupt();
-    std::fs::remove_dir_all(&dir).unwrap();
+    remove_test_dir(&dir);
 }
 
 #[test]
@@ -339,7 +363,7 @@ fn viewer_shows_a_remeshed_cloths_changing_mesh() {
         assert_eq!(result["plots"], serde_json::json!(plots));
     }
     viewer.interrupt();
-    std::fs::remove_dir_all(&dir).unwrap();
+    remove_test_dir(&dir);
 }
 
 #[test]
@@ -387,7 +411,7 @@ fn viewer_plays_a_walk_and_shows_the_frame_scrubbed_to() {
     assert!((track[k][0] - track[0][0]).abs() > 0.1, "the walker moved by frame {k}");
     screenshot(&viewer.url, &dir.join("profile"), k, "walk");
     viewer.interrupt();
-    std::fs::remove_dir_all(&dir).unwrap();
+    remove_test_dir(&dir);
 }
 
 /// A process killed when dropped: a failing test leaves no `anima run --live` behind.
@@ -462,5 +486,5 @@ fn viewer_live_slider_changes_the_running_controller() {
     assert_eq!(changes.len(), 1);
     assert!((changes[0]["value"].as_f64().unwrap() - value).abs() <= 0.5, "{changes:?} for {value}");
     drop(page);
-    std::fs::remove_dir_all(&dir).unwrap();
+    remove_test_dir(&dir);
 }
