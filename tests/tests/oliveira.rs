@@ -6,10 +6,11 @@
 use std::path::{Path, PathBuf};
 
 use anima_cloth::oliveira::{
-    BuildError, Centre, ClothDesc, ContactVelocity, Height, Material, ObjectDesc, OliveiraCloth,
-    OliveiraScene, Options, ShapeDesc, StepRule,
+    BuildError, ContactVelocity, Height, Material, ObjectDesc, OliveiraCloth, Options, ShapeDesc, StepRule,
 };
-use anima_geom::{DVec2, DVec3, DiagonalPattern};
+use anima_geom::DVec3;
+// The incline of the report's friction runs (`cargo xtask reproduce oliveira-choices`).
+use anima_lab::oliveira::choices::incline;
 use anima_ode::Integrator;
 use anima_scene::oliveira::LoadedOliveira;
 use anima_scene::{SceneError, load_oliveira};
@@ -179,34 +180,6 @@ fn repeated_runs_are_bit_identical() {
         (c.positions().to_vec(), c.velocities().to_vec())
     };
     assert_eq!(run(), run());
-}
-
-/// A small square cloth lying on a horizontal floor under gravity tilted by `degrees`: the same as a
-/// floor inclined by that angle, with the cloth already flat on it.
-fn incline(mu: f64, degrees: f64) -> OliveiraScene {
-    let a = degrees.to_radians();
-    OliveiraScene {
-        duration_s: 1.0,
-        gravity_m_s2: DVec3::new(9.81 * a.sin(), 0.0, -9.81 * a.cos()),
-        cloth: ClothDesc {
-            vertices_per_side: 2,
-            size_m: 0.1,
-            diagonals: DiagonalPattern::Uniform,
-            centre: Centre::At(DVec2::ZERO),
-            height: Height::At { z_m: 1e-4 },
-            tracked_vertex: (0, 0),
-        },
-        material: Material { friction: mu, ..Material::table_5_1() },
-        time_step: StepRule::Provot { beta: 0.008, startup_dt_s: Some(1e-4) },
-        restitution: 0.5,
-        objects: vec![ObjectDesc {
-            name: "incline".into(),
-            friction: mu,
-            shape: ShapeDesc::HalfSpace { point_m: DVec3::ZERO, normal: DVec3::Z },
-        }],
-        integrator: anima_ode::Integrator::Rk4,
-        options: Options::thesis(),
-    }
 }
 
 #[test]

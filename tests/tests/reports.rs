@@ -347,16 +347,19 @@ fn flex3d_md_quotes_the_generated_results() {
     );
 }
 
-/// `oliveira.md` quotes the static drapes' measurements from `oliveira-results.md` (its results
-/// table and the paragraph after it) and the adaptive runs' from `oliveira-adaptive.md` (what the
-/// full-duration runs show). The wall times change with each run of `cargo xtask reproduce oliveira`:
-/// this fails until the prose says what the regenerated report says.
+/// `oliveira.md` quotes the static drapes' measurements from `oliveira-results.md` (the choices the
+/// thesis leaves open and the scenes, from the report's last section; its results table and the
+/// paragraph after it; friction on the incline) and the adaptive runs' from `oliveira-adaptive.md`
+/// (what the full-duration runs show). The wall times change with each run of `cargo xtask reproduce
+/// oliveira`: this fails until the prose says what the regenerated report says.
 #[test]
 fn oliveira_md_quotes_the_generated_results() {
     assert_quotes_generated(
         "oliveira.md",
         &[
+            ("## Choices the thesis leaves open", "## Results (static meshes)", &["oliveira-results.md"]),
             ("## Results (static meshes)", "What the runs show", &["oliveira-results.md"]),
+            ("## Friction", "## Beyond the thesis", &["oliveira-results.md"]),
             ("What the full-duration runs show", "type-3 response", &["oliveira-adaptive.md"]),
         ],
         30,

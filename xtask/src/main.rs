@@ -32,7 +32,8 @@ enum Command {
     /// report (a partial run rewrites only its own sections).
     ///
     /// FLEX3D (docs/reproduction/flex3d-results.md): table-4-1, e-1 … e-8, or all.
-    /// Oliveira 2013 (oliveira-results.md): oliveira-1, oliveira-2, oliveira-3, or oliveira; with
+    /// Oliveira 2013 (oliveira-results.md): oliveira-1, oliveira-2, oliveira-3, oliveira-choices (the
+    /// scenes and what the switches for the open choices change), or oliveira (all four); with
     /// --adaptive the remeshers (oliveira-adaptive.md); oliveira-implicit: the fine drapes with implicit
     /// integrators (oliveira-implicit.md); membrane: mesh convergence of the spring models and of the
     /// continuum membrane (membrane.md).

@@ -3,6 +3,7 @@
 //! with implicit integrators ([`implicit`]) and the adaptive meshes ([`adaptive`]).
 
 pub mod adaptive;
+pub mod choices;
 pub mod drapes;
 pub mod implicit;
 pub mod membrane;
