@@ -559,7 +559,8 @@ fn throw(repo: &Repo) -> Result<String> {
     let _ = writeln!(
         s,
         "Fitness: Eq. 6.1 with H_max counted up to {:.2} m (anima's [RECON] cap, 0.5 m above the aimed \
-         point; the literal Eq. 6.1 rewards 12 m throws that miss).\n",
+         point; the literal Eq. 6.1 rewards throws far above the hoop that miss, as the searches on it below \
+         show).\n",
         nunes::throw_height_cap(&b)
     );
     s.push_str("| quantity | thesis (Nunes 2006) | anima |\n|---|---|---|\n");
