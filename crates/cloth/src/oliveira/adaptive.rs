@@ -240,11 +240,6 @@ impl AdaptiveCloth {
             }
         };
         let mut cloth = cloth;
-        if !matches!(engine, Engine::Static { .. }) {
-            // A graded mesh's bending elements lift the system's largest eigenvalue past what the
-            // preconditioner's fixed smoothing damps (`Stepper::set_bounded_smoothing`).
-            cloth.stepper_mut().set_bounded_smoothing(true);
-        }
         if let Engine::Oliveira { params, .. } = &engine {
             repel_unrefinable_edges(&mut cloth, params);
         }

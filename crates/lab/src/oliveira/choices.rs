@@ -204,10 +204,22 @@ pub fn section(repo: &Repo) -> Result<String> {
         s,
         "`cargo xtask reproduce oliveira-choices` rewrites this section alone. [oliveira.md](oliveira.md) says why each default is what it is; here each switch runs beside the default on the drape it matters for (RK4 and the thesis's step rule, as in the tests above). Particles are looked for inside the objects every {CHECK_EVERY} steps and at the end.\n"
     );
+    s.push_str(&scenes(repo)?);
+    s.push_str(&placement(repo)?);
+    let (text, fine) = corrected_path(repo)?;
+    s.push_str(&text);
+    let (text, coarse) = bending_floor(repo, &fine)?;
+    s.push_str(&text);
+    s.push_str(&edge_contacts(repo, &coarse)?);
+    s.push_str(&friction()?);
+    Ok(s + "\n")
+}
 
-    // The scenes as loaded.
-    let _ = writeln!(s, "| test | objects | cloth | A⁰ (m²) | duration (s) | start-up Δt (s) |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
+/// The scenes as the files load them.
+fn scenes(repo: &Repo) -> Result<String> {
+    let mut s = String::from(
+        "| test | objects | cloth | A⁰ (m²) | duration (s) | start-up Δt (s) |\n|---|---|---|---|---|---|\n",
+    );
     for test in &TESTS {
         let loaded = load(repo, test, 5)?;
         let scene = &loaded.scene;
@@ -227,13 +239,16 @@ pub fn section(repo: &Repo) -> Result<String> {
             scene.duration_s,
         );
     }
+    Ok(s)
+}
 
-    // Placement.
+/// Test I's coarse cloth centred over the highest point (the default) and over the objects' bounding box.
+fn placement(repo: &Repo) -> Result<String> {
     eprintln!("anima-lab: Oliveira choices: where the cloth is placed (Test I, 5 × 5) …");
     let test = &TESTS[0];
     let loaded = load(repo, test, 5)?;
-    let start = loaded.build()?;
-    let bounded = start
+    let bounded = loaded
+        .build()?
         .colliders()
         .iter()
         .filter(|c| !matches!(c.solid, Solid::HalfSpace(_)))
@@ -241,16 +256,12 @@ pub fn section(repo: &Repo) -> Result<String> {
     let centre = 0.5 * (bounded.min + bounded.max);
     let mut boxed = loaded.scene.clone();
     boxed.cloth.centre = Centre::At(DVec2::new(centre.x, centre.y));
-    let _ = writeln!(
-        s,
-        "\n**Where the cloth is placed** (Test I, 5 × 5; the thesis took {} steps):\n",
+    let mut s = format!(
+        "\n**Where the cloth is placed** (Test I, 5 × 5; the thesis took {} steps):\n\n\
+         | cloth centred over | middle particle over the object below it (cm) | first contact (s) | steps | particles inside at a check |\n\
+         |---|---|---|---|---|\n",
         test.thesis[0].2
     );
-    let _ = writeln!(
-        s,
-        "| cloth centred over | middle particle over the object below it (cm) | first contact (s) | steps | particles inside at a check |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|");
     for (label, scene) in
         [("the highest point (default)", &loaded.scene), ("the objects' bounding box", &boxed)]
     {
@@ -266,24 +277,24 @@ pub fn section(repo: &Repo) -> Result<String> {
             w.ever_inside
         );
     }
+    Ok(s)
+}
 
-    // Re-testing the corrected path.
+/// Test I's fine drape with the corrected path re-tested (the default) and as printed; the default
+/// run is handed on.
+fn corrected_path(repo: &Repo) -> Result<(String, Watched)> {
     eprintln!("anima-lab: Oliveira choices: the corrected path re-tested or not (Test I, 17 × 17) …");
-    let fine = load(repo, test, 17)?;
+    let fine = load(repo, &TESTS[0], 17)?;
     let rechecked = watch(&fine.scene, &fine)?;
     let mut literal = fine.scene.clone();
     literal.options.recheck_corrected_path = false;
     let unchecked = watch(&literal, &fine)?;
-    let _ = writeln!(
-        s,
-        "\n**Re-testing the corrected path** (Test I, 17 × 17, to {} s):\n",
+    let mut s = format!(
+        "\n**Re-testing the corrected path** (Test I, 17 × 17, to {} s):\n\n\
+         | corrected path | particles inside at a check | deepest (cm) | inside at the end | steps |\n\
+         |---|---|---|---|---|\n",
         fine.scene.duration_s
     );
-    let _ = writeln!(
-        s,
-        "| corrected path | particles inside at a check | deepest (cm) | inside at the end | steps |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|");
     for (label, w) in [("re-tested (default)", &rechecked), ("as printed (Eq. 4.18 untested)", &unchecked)] {
         let _ = writeln!(
             s,
@@ -294,10 +305,13 @@ pub fn section(repo: &Repo) -> Result<String> {
             w.steps
         );
     }
+    Ok((s, rechecked))
+}
 
-    // The bending floor.
+/// The coarse drapes with the bending floor on (the default) and off, and the triangles' shapes on
+/// them and on the fine Test I drape `fine`; the coarse default runs are handed on.
+fn bending_floor(repo: &Repo, fine: &Watched) -> Result<(String, Vec<(&'static DrapeTest, Watched)>)> {
     eprintln!("anima-lab: Oliveira choices: the bending floor on and off (the 5 × 5 drapes) …");
-    let eta = Options::BENDING_HEIGHT_FLOOR;
     let mut same_bits = Vec::new();
     let mut coarse = Vec::new();
     for t in &TESTS {
@@ -309,32 +323,32 @@ pub fn section(repo: &Repo) -> Result<String> {
         same_bits.push(with.positions == without.positions && with.velocities == without.velocities);
         coarse.push((t, with));
     }
-    let thinnest = |ws: &[&Watched]| ws.iter().map(|w| w.least_height_ratio).fold(f64::INFINITY, f64::min);
-    let least_area = |ws: &[&Watched]| ws.iter().map(|w| w.least_area_ratio).fold(f64::INFINITY, f64::min);
-    let coarse_runs: Vec<&Watched> = coarse.iter().map(|(_, w)| w).collect();
-    let _ = writeln!(
-        s,
-        "\n**The bending floor** (η = {eta}: a bending element's mode is scaled down where a triangle's height over its hinge is below η·|e|). The 5 × 5 drapes of Tests I, II and III end with the same bits with the floor off: {}. On those drapes the smallest triangle at a check has {:.0} % of its rest area and the thinnest a height of {:.2}·|e| over one of its edges; on the 17 × 17 Test I drape (the default run above) {:.0} % and {:.2}·|e|.\n",
+    let least = |f: fn(&Watched) -> f64| coarse.iter().map(|(_, w)| f(w)).fold(f64::INFINITY, f64::min);
+    let s = format!(
+        "\n**The bending floor** (η = {}: a bending element's mode is scaled down where a triangle's height over its hinge is below η·|e|). The 5 × 5 drapes of Tests I, II and III end with the same bits with the floor off: {}. On those drapes the smallest triangle at a check has {:.0} % of its rest area and the thinnest a height of {:.2}·|e| over one of its edges; on the 17 × 17 Test I drape (the default run above) {:.0} % and {:.2}·|e|.\n\n",
+        Options::BENDING_HEIGHT_FLOOR,
         if same_bits.iter().all(|&b| b) {
             "yes, all three".to_owned()
         } else {
             format!("**no** ({same_bits:?})")
         },
-        100.0 * least_area(&coarse_runs),
-        thinnest(&coarse_runs),
-        100.0 * rechecked.least_area_ratio,
-        rechecked.least_height_ratio,
+        100.0 * least(|w| w.least_area_ratio),
+        least(|w| w.least_height_ratio),
+        100.0 * fine.least_area_ratio,
+        fine.least_height_ratio,
     );
+    Ok((s, coarse))
+}
 
-    // Edge contacts.
+/// The coarse drapes with edge contacts off (`coarse`, the default runs) and on.
+fn edge_contacts(repo: &Repo, coarse: &[(&DrapeTest, Watched)]) -> Result<String> {
     eprintln!("anima-lab: Oliveira choices: edge contacts on (the 5 × 5 drapes) …");
-    let _ = writeln!(s, "**Edge contacts** (`options.edge_contacts`), on the 5 × 5 drapes:\n");
-    let _ = writeln!(
-        s,
-        "| test | edge contacts | particles inside at a check | inside at the end | P at the end (m) | steps |"
+    let mut s = String::from(
+        "**Edge contacts** (`options.edge_contacts`), on the 5 × 5 drapes:\n\n\
+         | test | edge contacts | particles inside at a check | inside at the end | P at the end (m) | steps |\n\
+         |---|---|---|---|---|---|\n",
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
-    for (t, off) in &coarse {
+    for (t, off) in coarse {
         let loaded = load(repo, t, 5)?;
         let mut scene = loaded.scene.clone();
         scene.options.edge_contacts = true;
@@ -354,17 +368,17 @@ pub fn section(repo: &Repo) -> Result<String> {
             );
         }
     }
+    Ok(s)
+}
 
-    // Friction on an incline.
+/// The cloth on the incline at each of [`INCLINE_MU`].
+fn friction() -> Result<String> {
     eprintln!("anima-lab: Oliveira choices: friction on a {INCLINE_DEGREES}° incline …");
-    let _ = writeln!(
-        s,
-        "\n**Friction** (Eqs. 4.16–4.17): a 10 cm cloth resting flat under gravity tilted by {INCLINE_DEGREES}° (the same as a {INCLINE_DEGREES}° incline), μ the same for cloth and floor, {} s. Coulomb friction would hold it for μ ≥ tan {INCLINE_DEGREES}° = {:.3}.\n",
+    let mut s = format!(
+        "\n**Friction** (Eqs. 4.16–4.17): a 10 cm cloth resting flat under gravity tilted by {INCLINE_DEGREES}° (the same as a {INCLINE_DEGREES}° incline), μ the same for cloth and floor, {} s. Coulomb friction would hold it for μ ≥ tan {INCLINE_DEGREES}° = {:.3}.\n\n| μ | moved down the slope (mm) |\n|---|---|\n",
         incline(0.0, INCLINE_DEGREES).duration_s,
         INCLINE_DEGREES.to_radians().tan()
     );
-    let _ = writeln!(s, "| μ | moved down the slope (mm) |");
-    let _ = writeln!(s, "|---|---|");
     for mu in INCLINE_MU {
         let scene = incline(mu, INCLINE_DEGREES);
         let mut cloth = OliveiraCloth::new(&scene, vec![])?;
@@ -372,5 +386,5 @@ pub fn section(repo: &Repo) -> Result<String> {
         cloth.run_until(scene.duration_s).with_context(|| format!("the incline at μ = {mu}"))?;
         let _ = writeln!(s, "| {mu} | {:.2} |", 1e3 * (cloth.tracked_position() - start).x);
     }
-    Ok(s + "\n")
+    Ok(s)
 }

@@ -112,7 +112,7 @@ impl<C: Coord> ImplicitWorkspace<C> {
             aggregation: None,
             positions: Vec::new(),
             coarse_stale: true,
-            bounded_smoothing: false,
+            bounded_smoothing: true,
             bdf2: bdf2.then(|| State::zeros(n)),
             prev_h: 0.0,
             w: zeros(),
