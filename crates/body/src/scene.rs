@@ -130,10 +130,11 @@ impl BodyScene {
         Ok(())
     }
 
-    /// Seconds between rendered frames (NaN for a scene that names neither field; a checked scene
-    /// names one).
-    pub fn frame_interval_s(&self) -> f64 {
-        frame_interval_of(self.frame_rate_hz, self.frame_interval).unwrap_or(f64::NAN)
+    /// Seconds between rendered frames; an error naming the field for a scene (built in code) that
+    /// names neither, both, or a value that is not positive (a loaded scene was checked for this).
+    pub fn frame_interval_s(&self) -> Result<f64, SkeletonError> {
+        frame_interval_of(self.frame_rate_hz, self.frame_interval)
+            .map_err(|(field, why)| SkeletonError::invalid(field, why))
     }
 
     /// Number of control steps: ⌈duration / Δt⌉ (rounded to the nearest step when within 1e-9).

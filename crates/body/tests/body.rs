@@ -670,6 +670,27 @@ fn the_pusher_and_the_acrobat_collide_with_each_other_but_not_themselves() {
     assert!(met, "the acrobat never touched the pusher");
 }
 
+#[test]
+fn a_scene_built_in_code_without_a_frame_rate_says_so() {
+    // A loaded scene names its frame rate; one filled in code may not, and must not run as if it had
+    // asked for a frame at every step.
+    let text = include_str!("../../../assets/scenes/backflip-pair.ron");
+    let mut scene = BodyScene::from_ron_str(text).unwrap();
+    let rate = scene.frame_rate_hz.or(scene.frame_interval.map(|i| 1.0 / i)).unwrap();
+    assert!((scene.frame_interval_s().unwrap() - 1.0 / rate).abs() < 1e-15);
+    scene.frame_rate_hz = None;
+    scene.frame_interval = None;
+    let e = scene.frame_interval_s().unwrap_err().to_string();
+    assert!(e.contains("frame_rate_hz"), "{e}");
+    scene.frame_rate_hz = Some(30.0);
+    scene.frame_interval = Some(0.1);
+    let e = scene.frame_interval_s().unwrap_err().to_string();
+    assert!(e.contains("not both"), "{e}");
+    scene.frame_interval = None;
+    scene.frame_rate_hz = Some(-1.0);
+    assert!(scene.frame_interval_s().is_err());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Terrain
 

@@ -58,10 +58,11 @@ pub struct CharacterScene {
 }
 
 impl CharacterScene {
-    /// Seconds between rendered frames (NaN for a scene that names neither field; a loaded scene
-    /// names one).
-    pub fn frame_interval_s(&self) -> f64 {
-        anima_body::scene::frame_interval_of(self.frame_rate_hz, self.frame_interval).unwrap_or(f64::NAN)
+    /// Seconds between rendered frames; an error naming the field for a scene (built in code) that
+    /// names neither, both, or a value that is not positive (a loaded scene was checked for this).
+    pub fn frame_interval_s(&self) -> Result<f64, anima_body::SkeletonError> {
+        anima_body::scene::frame_interval_of(self.frame_rate_hz, self.frame_interval)
+            .map_err(|(field, why)| anima_body::SkeletonError::invalid(field, why))
     }
 
     /// Control iterations in the run.

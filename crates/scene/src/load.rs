@@ -279,7 +279,8 @@ fn load_ron(file: &File, text: &str, opts: &LoadOptions) -> Result<Scene, SceneE
         }
         Some("BodyScene") => {
             let scene = BodyScene::from_ron_str(text).map_err(|e| file.description(e))?;
-            if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval_s()) {
+            let interval = scene.frame_interval_s().map_err(|e| file.description(e))?;
+            if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, interval) {
                 return Err(file.invalid_at(text, "duration_s", why));
             }
             let skeletons =
@@ -546,11 +547,11 @@ impl File<'_> {
         let scene: CharacterScene =
             anima_format::ron_text::from_str(text).map_err(|e| self.parse_error(e))?;
         check_positive(self, text, "duration_s", scene.duration)?;
-        anima_body::scene::frame_interval_of(scene.frame_rate_hz, scene.frame_interval)
+        let interval = anima_body::scene::frame_interval_of(scene.frame_rate_hz, scene.frame_interval)
             .map_err(|(field, why)| self.invalid_at(text, field, why))?;
         check_positive(self, text, "world.dt_s", scene.world.dt)?;
         scene.world.check().map_err(|e| self.invalid_at(text, "world", e.to_string()))?;
-        if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, scene.frame_interval_s()) {
+        if let Some(why) = figures_run_problem(scene.duration, scene.world.dt, interval) {
             return Err(self.invalid_at(text, "duration_s", why));
         }
         if scene.models.is_empty() {

@@ -603,12 +603,15 @@ mod kinds {
         let Ok(Scene::Character(l)) = load(&p, &LoadOptions::default()) else {
             panic!("the old spelling reads")
         };
-        assert_eq!((l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s()), (50.0, 0.05, 0.5));
+        assert_eq!(
+            (l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s().expect("checked")),
+            (50.0, 0.05, 0.5)
+        );
         let Ok(Scene::Character(new)) = load(&write("new-spelling.ron", &walk), &LoadOptions::default())
         else {
             panic!("the scene reads")
         };
-        assert_eq!(new.scene.frame_interval_s().to_bits(), 0.5f64.to_bits());
+        assert_eq!(new.scene.frame_interval_s().expect("checked").to_bits(), 0.5f64.to_bits());
         // One of the two frame clocks, positive.
         let both = walk.replace("frame_rate_hz: 2.0,", "frame_rate_hz: 2.0,\n    frame_interval: 0.5,");
         let e = at("both", &both);

@@ -184,7 +184,7 @@ pub fn run_body(
     let scene = &loaded.scene;
     let mut figures = Posed::build(loaded)?;
     let n_steps = scene.n_steps();
-    run_figures(&mut figures, label, n_steps, scene.frame_interval_s(), opts, progress, |_| false)
+    run_figures(&mut figures, label, n_steps, scene.frame_interval_s()?, opts, progress, |_| false)
 }
 
 /// Runs a character scene: the controller drives the models; the scene's evaluation, if any, is taken
@@ -239,7 +239,7 @@ pub fn run_character(
         &mut c,
         label,
         scene.n_steps(),
-        scene.frame_interval_s(),
+        scene.frame_interval_s()?,
         opts,
         progress,
         |c: &Character| {

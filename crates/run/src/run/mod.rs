@@ -486,16 +486,14 @@ impl Overrides {
             Scene::Flex3d(l) => anima_scene::flex3d::check(&l.scene).err().map(|e| e.to_string()),
             Scene::Sheet(s) => s.check().err().map(|e| e.to_string()),
             Scene::Oliveira(l) => anima_scene::oliveira::check_contact(&l.scene).err(),
-            Scene::Body(l) => anima_scene::figures_run_problem(
-                l.scene.duration,
-                l.scene.world.dt,
-                l.scene.frame_interval_s(),
-            ),
-            Scene::Character(l) => anima_scene::figures_run_problem(
-                l.scene.duration,
-                l.scene.world.dt,
-                l.scene.frame_interval_s(),
-            ),
+            Scene::Body(l) => match l.scene.frame_interval_s() {
+                Ok(f) => anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, f),
+                Err(e) => Some(e.to_string()),
+            },
+            Scene::Character(l) => match l.scene.frame_interval_s() {
+                Ok(f) => anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, f),
+                Err(e) => Some(e.to_string()),
+            },
         };
         match problem {
             Some(why) => anyhow::bail!("with the options as given: {why}"),
