@@ -292,10 +292,10 @@ impl<C: Coord> Stepper<C> {
     /// Whether the rigid-aggregation preconditioner (generalised-α's default solver) damps its
     /// block-Jacobi smoothing by an estimate of the system's largest eigenvalue, so that the smoothing
     /// never amplifies the stiffest modes (on by default; the measurements and the reason are at
-    /// `implicit::aggregation::SMOOTHING_BOUND`). A cloth mesh graded by remeshing needs it, and so does
-    /// the 257² Bunny drape once it touches: their bending elements lift that eigenvalue past what the
-    /// fixed damping allows. Where the fixed damping already contracts the bound changes no bit. Off, the
-    /// damping is fixed and nothing is estimated. No effect on other solvers.
+    /// `implicit::aggregation::SMOOTHING_BOUND`). A cloth mesh graded by remeshing needs it: its bending
+    /// elements lift that eigenvalue past what the fixed damping allows (the largest uniform drapes pass
+    /// it too, once they touch). Where the fixed damping already contracts the bound changes no bit.
+    /// Off, the damping is fixed and nothing is estimated. No effect on other solvers.
     pub fn set_bounded_smoothing(&mut self, on: bool) {
         if let Some(ws) = &mut self.implicit {
             ws.bounded_smoothing = on;
