@@ -486,14 +486,10 @@ impl Overrides {
             Scene::Flex3d(l) => anima_scene::flex3d::check(&l.scene).err().map(|e| e.to_string()),
             Scene::Sheet(s) => s.check().err().map(|e| e.to_string()),
             Scene::Oliveira(l) => anima_scene::oliveira::check_contact(&l.scene).err(),
-            Scene::Body(l) => match l.scene.frame_interval_s() {
-                Ok(f) => anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, f),
-                Err(e) => Some(e.to_string()),
-            },
-            Scene::Character(l) => match l.scene.frame_interval_s() {
-                Ok(f) => anima_scene::figures_run_problem(l.scene.duration, l.scene.world.dt, f),
-                Err(e) => Some(e.to_string()),
-            },
+            Scene::Body(l) => figures_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s()),
+            Scene::Character(l) => {
+                figures_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s())
+            }
         };
         match problem {
             Some(why) => anyhow::bail!("with the options as given: {why}"),
@@ -568,6 +564,19 @@ pub fn stability_warning(
             )
         }
     })
+}
+
+/// What keeps a figures run of `duration` at step `dt` from running, with its frame clock as the scene
+/// gives it (an error when the scene names none).
+fn figures_problem(
+    duration: f64,
+    dt: f64,
+    interval: Result<f64, anima_body::SkeletonError>,
+) -> Option<String> {
+    match interval {
+        Ok(f) => anima_scene::figures_run_problem(duration, dt, f),
+        Err(e) => Some(e.to_string()),
+    }
 }
 
 #[cfg(test)]
