@@ -6,20 +6,26 @@
 use anima_body::{BodyPose, World};
 use anima_character::Character;
 use anima_cloth::StepError;
-use anima_cloth::flex3d::Flex3dWorld;
 use anima_geom::{DVec3, TriangleMesh};
 use anima_scene::Scene;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 
-use crate::drape::object_meshes;
 use crate::run::SolveOptions;
-use crate::run::body::{Figures, Posed, build_character};
-use crate::run::sheet::new_cloth;
+use crate::run::body::{Figures, Posed};
 use crate::simulation::Deformable;
 
 /// Any cloth model, through the contract every one keeps (sendable: the Python package steps it with
 /// the interpreter's lock released).
 pub(crate) type ClothModel = Box<dyn Deformable<Error = StepError> + Send + Sync>;
+
+/// What a cloth scene's kind builds for a [`ClothSim`].
+pub(crate) struct ClothParts {
+    pub model: ClothModel,
+    pub triangles: Vec<[u32; 3]>,
+    pub obstacles: Vec<TriangleMesh>,
+    /// `sheet`, `flex3d` or `oliveira`.
+    pub kind: &'static str,
+}
 
 /// A cloth scene of any kind (a sheet, FLEX3D surfaces, an Oliveira drape, remeshed or not), ready to
 /// step.
@@ -37,25 +43,10 @@ impl ClothSim {
     /// Builds a cloth scene as `anima run` would, with `solve`'s choices for the implicit integrators.
     /// Figures are not cloth: [`FigureSim::new`] takes them.
     pub fn new(scene: &Scene, solve: &SolveOptions) -> Result<Self> {
-        let (mut model, triangles, obstacles, kind): (ClothModel, _, _, _) = match scene {
-            Scene::Sheet(s) => {
-                let (sim, triangles) = new_cloth(s, false)?;
-                (sim, triangles, Vec::new(), "sheet")
-            }
-            Scene::Flex3d(l) => {
-                let world = Flex3dWorld::new(&l.scene, l.meshes()).context("building the scene")?;
-                let (triangles, obstacles) = (world.all_triangles(), world.objects().to_vec());
-                (Box::new(world), triangles, obstacles, "flex3d")
-            }
-            Scene::Oliveira(l) => {
-                let cloth = l.build().context("building the drape")?;
-                let obstacles = object_meshes(&cloth).into_iter().map(|(m, _)| m).collect();
-                (Box::new(l.with_remesher(cloth)), Vec::new(), obstacles, "oliveira")
-            }
-            Scene::Body(_) | Scene::Character(_) => {
-                bail!("a {} scene holds figures, not cloth", scene.kind().name())
-            }
+        let Some(parts) = crate::run::kind(scene).cloth() else {
+            bail!("a {} scene holds figures, not cloth", scene.kind().name())
         };
+        let ClothParts { mut model, triangles, obstacles, kind } = parts?;
         solve.configure(model.stepper_mut());
         Ok(Self { model, triangles, obstacles, kind })
     }
@@ -158,7 +149,7 @@ pub struct FigureSim {
     poses: Vec<BodyPose>,
 }
 
-enum FigureModel {
+pub(crate) enum FigureModel {
     Posed(Box<Posed>),
     Character(Box<Character>),
 }
@@ -174,11 +165,10 @@ impl std::fmt::Debug for FigureModel {
 
 impl FigureSim {
     pub fn new(scene: &Scene) -> Result<Self> {
-        let figures = match scene {
-            Scene::Body(l) => FigureModel::Posed(Box::new(Posed::build(l)?)),
-            Scene::Character(l) => FigureModel::Character(Box::new(build_character(l)?)),
-            _ => bail!("a {} scene holds cloth, not figures", scene.kind().name()),
+        let Some(figures) = crate::run::kind(scene).figures() else {
+            bail!("a {} scene holds cloth, not figures", scene.kind().name())
         };
+        let figures = figures?;
         Ok(Self { figures, poses: Vec::new() })
     }
 

@@ -5,6 +5,7 @@
 pub mod body;
 pub mod export;
 pub mod flex3d;
+mod kind;
 pub mod oliveira;
 pub mod series;
 pub mod sheet;
@@ -13,7 +14,6 @@ use std::path::{Path, PathBuf};
 
 use anima_cloth::contact_mode::ContactMode;
 use anima_cloth::flex3d::{ContactApproach, FrictionMode, StaticResponse};
-use anima_cloth::oliveira::StepRule;
 use anima_cloth::self_collision::SelfCollisionMode;
 use anima_geom::DVec3;
 use anima_ode::{Integrator, LinearSolver};
@@ -22,6 +22,7 @@ use anyhow::Result;
 use serde::Serialize;
 
 pub use export::Export;
+pub(crate) use kind::kind;
 
 use crate::output::write_atomic;
 
@@ -297,19 +298,12 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
     if let Some(dir) = &opts.out_dir {
         crate::output::check_writable(dir)?;
-        let surfaces: Vec<String> = match scene {
-            Scene::Flex3d(l) => l.scene.surfaces.iter().map(|s| format!("{}_", s.name)).collect(),
-            _ => Vec::new(),
-        };
+        let kind = kind::kind(scene);
         let ours = |name: &str| {
-            use crate::output::is_frame_file as frame;
-            let frame_file = match scene {
-                Scene::Flex3d(_) => surfaces.iter().any(|p| frame(name, p, ".OBT") || frame(name, p, ".obj")),
-                Scene::Sheet(_) => frame(name, "sheet_", ".obj"),
-                Scene::Oliveira(_) => frame(name, "cloth_", ".obj"),
-                Scene::Body(_) | Scene::Character(_) => frame(name, "frame_", ".png"),
-            };
-            frame_file || name == export::GLTF_FILE || name == export::USD_FILE || name == series::SERIES_FILE
+            kind.is_frame_file(name)
+                || name == export::GLTF_FILE
+                || name == export::USD_FILE
+                || name == series::SERIES_FILE
         };
         let removed = crate::output::remove_stale(dir, ours)?;
         if removed > 0 {
@@ -319,13 +313,7 @@ pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Pro
             ));
         }
     }
-    let run = |progress: &mut dyn Progress| match scene {
-        Scene::Flex3d(s) => Ok(flex3d::run(s, label, opts, progress)?.0),
-        Scene::Sheet(s) => sheet::run(s, label, opts, progress),
-        Scene::Oliveira(s) => oliveira::run(s, label, opts, progress),
-        Scene::Body(s) => body::run_body(s, label, opts, progress),
-        Scene::Character(s) => body::run_character(s, label, opts, progress),
-    };
+    let run = |progress: &mut dyn Progress| kind::kind(scene).run(label, opts, progress);
     if opts.parallel {
         return run(progress);
     }
@@ -393,104 +381,17 @@ fn positive(what: &str, v: f64) -> Result<f64> {
 impl Overrides {
     /// Applies the changes to `scene`, or says which one does not apply to its kind.
     pub fn apply(&self, scene: &mut Scene) -> Result<()> {
-        let kind = scene.kind().name();
-        let not_for = |what: &str| anyhow::anyhow!("{what} does not apply to a {kind} scene");
         let dt = self.dt.map(|d| positive("--dt", d)).transpose()?;
         let duration = self.duration.map(|d| positive("--duration", d)).transpose()?;
-        if self.flex3d.any() && !matches!(scene, Scene::Flex3d(_)) {
-            return Err(not_for("a FLEX3D switch (--friction, --contact, --static-response, …)"));
-        }
-        if let Some(i) = self.integrator
-            && matches!(scene, Scene::Flex3d(_) | Scene::Oliveira(_))
-        {
-            anima_cloth::check_fixed_step_integrator(i)
-                .map_err(|why| anyhow::anyhow!("--integrator {i}: {why}"))?;
-        }
-        // Each switch given replaces the scene's value.
-        fn set<T>(field: &mut T, value: Option<T>) {
-            if let Some(v) = value {
-                *field = v;
-            }
-        }
-        match scene {
-            Scene::Flex3d(l) => {
-                let s = &mut l.scene;
-                set(&mut s.integrator, self.integrator);
-                set(&mut s.dt_s, dt);
-                set(&mut s.duration_s, duration);
-                set(&mut s.gravity_m_s2, self.gravity);
-                set(&mut s.options.object_contact, self.contact_mode);
-                set(&mut s.options.self_collision, self.self_collision);
-                let f = &self.flex3d;
-                set(&mut s.friction.mode, f.friction);
-                set(&mut s.options.contact, f.contact);
-                set(&mut s.options.static_response, f.static_response);
-                s.options.external_force_is_acceleration |= f.external_is_acceleration;
-                s.options.bend_reaction |= f.bend_reaction;
-                s.options.friction_clamp |= f.friction_clamp;
-                if f.no_collisions {
-                    s.options.collisions = false;
-                }
-            }
-            Scene::Sheet(s) => {
-                if self.contact_mode.is_some() {
-                    return Err(not_for("--contact-mode (the standard sheets touch no object)"));
-                }
-                if self.self_collision.is_some() {
-                    return Err(not_for("--self-collision (a hanging standard sheet never folds)"));
-                }
-                if self.gravity.is_some() {
-                    return Err(not_for(
-                        "--gravity (the standard sheet's gravity is part of its definition)",
-                    ));
-                }
-                set(&mut s.integrator, self.integrator);
-                set(&mut s.dt_s, dt);
-                set(&mut s.duration_s, duration);
-            }
-            Scene::Oliveira(l) => {
-                let s = &mut l.scene;
-                set(&mut s.integrator, self.integrator);
-                set(&mut s.time_step, dt.map(|dt_s| StepRule::Fixed { dt_s }));
-                set(&mut s.duration_s, duration);
-                set(&mut s.gravity_m_s2, self.gravity);
-                set(&mut s.options.contact, self.contact_mode);
-                set(&mut s.options.self_collision, self.self_collision);
-            }
-            Scene::Body(_) | Scene::Character(_) => {
-                if self.integrator.is_some()
-                    || self.gravity.is_some()
-                    || self.contact_mode.is_some()
-                    || self.self_collision.is_some()
-                {
-                    return Err(not_for(
-                        "--integrator, --gravity, --contact-mode or --self-collision (a figure's world sets them)",
-                    ));
-                }
-                let (world, scene_duration) = match scene {
-                    Scene::Body(l) => (&mut l.scene.world, &mut l.scene.duration),
-                    Scene::Character(l) => (&mut l.scene.world, &mut l.scene.duration),
-                    _ => unreachable!("matched above"),
-                };
-                set(&mut world.dt, dt);
-                set(scene_duration, duration);
-            }
-        }
+        let changes = kind::Changes { overrides: self, dt, duration, kind: scene.kind().name() };
+        kind::kind_mut(scene).apply(&changes)?;
         self.check_after(scene)
     }
 
     /// The run the changed scene asks for must still be one anima can run (`anima_scene::limits`): the
     /// loader checked the file's numbers, this checks the command line's.
     fn check_after(&self, scene: &Scene) -> Result<()> {
-        let problem = match scene {
-            Scene::Flex3d(l) => anima_scene::flex3d::check(&l.scene).err().map(|e| e.to_string()),
-            Scene::Sheet(s) => s.check().err().map(|e| e.to_string()),
-            Scene::Oliveira(l) => anima_scene::oliveira::check_contact(&l.scene).err(),
-            Scene::Body(l) => figures_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s()),
-            Scene::Character(l) => {
-                figures_problem(l.scene.duration, l.scene.world.dt, l.scene.frame_interval_s())
-            }
-        };
+        let problem = kind::kind(scene).problem();
         match problem {
             Some(why) => anyhow::bail!("with the options as given: {why}"),
             None => Ok(()),
