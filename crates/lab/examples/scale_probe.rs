@@ -1,4 +1,5 @@
-//! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny),
+//! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny), or
+//! `sheet` for the standard sheet of V × V particles (`T` seconds, one run),
 //! `V` = 65 | 129 | 257 (65), `T` = simulated seconds (3; a 3 s run of a size whose converged references
 //! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1),
 //! `REGIME` (Newton iterations for contacts that change regime; the stepper's default), `REFERENCES=1`
@@ -19,8 +20,10 @@ fn main() -> anyhow::Result<()> {
     let threads: usize = var("THREADS").and_then(|s| s.parse().ok()).unwrap_or(0);
     let references = var("REFERENCES").is_some_and(|s| s == "1");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let report = pool
-        .install(|| anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime, references))?;
+    let report = pool.install(|| match obstacle.as_str() {
+        "sheet" => anima_lab::scale::sheet_probe(v, t),
+        _ => anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime, references),
+    })?;
     println!("{report}");
     Ok(())
 }

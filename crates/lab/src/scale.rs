@@ -831,6 +831,33 @@ pub fn probe(
     Ok(out)
 }
 
+/// The standard sheet N × N for `seconds` at 1/60 s by generalised-α on the pool it runs in, with where
+/// a step's time went (`OBSTACLE=sheet V=N` of the `scale_probe` example).
+pub fn sheet_probe(n: usize, seconds: f64) -> Result<String> {
+    let spec = SheetSpec::standard(n);
+    let mut sim = NetworkSim::new(spec.build()?, spec.positions(), Integrator::GeneralizedAlpha, DT)?;
+    sim.stepper_mut().set_profiling(true);
+    let steps = (seconds / DT).round().max(1.0) as usize;
+    let started = Instant::now();
+    sim.run(steps).with_context(|| format!("the standard sheet N = {n}"))?;
+    let wall = started.elapsed().as_secs_f64();
+    let p = sim.stepper_mut().profile().unwrap_or_default();
+    let per = |s: f64| 1e3 * s / steps as f64;
+    Ok(format!(
+        "standard sheet {n}², {seconds} s on {} threads: {:.2} ms per step, {:.3} µs per particle-step \
+         (assembly {:.2}, set-up {:.2}, solves {:.2}); Newton {:.2}, CG {:.2}, coarse set-ups {:.2} per step",
+        anima_ode::parallel::threads(),
+        per(wall),
+        1e6 * wall / (steps as f64 * (n * n) as f64),
+        per(p.assembly_s),
+        per(p.setup_s),
+        per(p.solve_s),
+        p.newton_iterations as f64 / steps as f64,
+        p.solver_iterations as f64 / steps as f64,
+        p.factorizations as f64 / steps as f64,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
