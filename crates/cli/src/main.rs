@@ -457,21 +457,8 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     };
     args.overrides().apply(&mut scene)?;
     let opts = args.options()?;
-    if opts.reference.is_some() && !matches!(scene, Scene::Sheet(_)) {
-        anyhow::bail!("--reference applies to sheet scenes only");
-    }
-    // Solver options apply to the implicit integrators only, ρ∞ and Newton to generalised-α only.
-    let integrator = scene.integrator();
-    if opts.solve.linear_solver.is_some() && !integrator.is_some_and(Integrator::is_implicit) {
-        anyhow::bail!(
-            "--linear-solver applies to the implicit integrators only (implicit-euler, bdf2, generalized-alpha)"
-        );
-    }
-    if (opts.solve.rho_inf.is_some() || opts.solve.newton_iterations.is_some())
-        && integrator != Some(Integrator::GeneralizedAlpha)
-    {
-        anyhow::bail!("--rho-inf and --newton-iterations apply to generalized-alpha only");
-    }
+    // Before the run spends its time, as the outputs below.
+    opts.check(&scene)?;
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.
     anima_run::output::check_output_path(&summary_path)?;

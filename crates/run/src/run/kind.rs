@@ -112,6 +112,10 @@ pub(crate) trait KindRun {
     fn apply(&mut self, changes: &Changes<'_>) -> Result<()>;
     /// What keeps the scene, as it now is, from running (`anima_scene::limits`), if anything.
     fn problem(&self) -> Option<String>;
+    /// Whether a run of this kind compares its end with reference positions ([`super::RunOptions::reference`]).
+    fn takes_reference(&self) -> bool {
+        false
+    }
     /// The scene as a cloth to step ([`crate::sim::ClothSim`]); `None` for figures.
     fn cloth(&self) -> Option<Result<ClothParts>> {
         None
@@ -171,6 +175,10 @@ impl KindRun for LoadedFlex3d {
 impl KindRun for SheetScene {
     fn is_frame_file(&self, name: &str) -> bool {
         is_frame_file(name, "sheet_", ".obj")
+    }
+
+    fn takes_reference(&self) -> bool {
+        true
     }
 
     fn run(&self, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {

@@ -84,6 +84,27 @@ impl RunOptions {
     fn export_dir(&self) -> Option<&Path> {
         self.out_dir.as_deref().filter(|_| self.export.is_some())
     }
+
+    /// Says which option does not apply to `scene`, if one does not: a reference for a scene that is
+    /// not a sheet, solver choices for an explicit integrator, ρ∞ and Newton iterations for any
+    /// integrator but generalised-α. [`run`] checks it first, so an option is never silently ignored.
+    pub fn check(&self, scene: &Scene) -> Result<()> {
+        if self.reference.is_some() && !kind::kind(scene).takes_reference() {
+            anyhow::bail!("--reference applies to sheet scenes only");
+        }
+        let integrator = scene.integrator();
+        if self.solve.linear_solver.is_some() && !integrator.is_some_and(Integrator::is_implicit) {
+            anyhow::bail!(
+                "--linear-solver applies to the implicit integrators only (implicit-euler, bdf2, generalized-alpha)"
+            );
+        }
+        if (self.solve.rho_inf.is_some() || self.solve.newton_iterations.is_some())
+            && integrator != Some(Integrator::GeneralizedAlpha)
+        {
+            anyhow::bail!("--rho-inf and --newton-iterations apply to generalized-alpha only");
+        }
+        Ok(())
+    }
 }
 
 /// How an implicit integrator solves its steps; `None` keeps the integrator's default.
@@ -290,12 +311,13 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
     })
 }
 
-/// Runs a loaded scene of any kind; `label` names it in the summary. The output folder is checked
-/// writable first, and the frames an earlier run of the same kind left there are removed (with a
+/// Runs a loaded scene of any kind; `label` names it in the summary. The options are checked against
+/// the scene first ([`RunOptions::check`]), and the output folder checked writable, and the frames an earlier run of the same kind left there are removed (with a
 /// warning), so the folder holds this run's frames only; so is an earlier `animation.glb` or
 /// `series.json`, whatever its kind, since it shows an earlier run (this run writes its own at its end
 /// when it exports, or keeps series).
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {
+    opts.check(scene)?;
     if let Some(dir) = &opts.out_dir {
         crate::output::check_writable(dir)?;
         let kind = kind::kind(scene);
@@ -483,6 +505,37 @@ fn figures_problem(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An option that does not apply to the scene is refused by the run itself, before anything is
+    /// written, not only by the command line.
+    #[test]
+    fn a_run_refuses_an_option_its_scene_does_not_take() {
+        let sheet = Scene::Sheet(anima_scene::sheet::SheetScene::standard(4));
+        let stand = anima_scene::load(&crate::test_asset("scenes/stand.ron"), &Default::default()).unwrap();
+        let with = |f: fn(&mut RunOptions)| {
+            let mut o = RunOptions::quiet();
+            f(&mut o);
+            o
+        };
+        let reference = with(|o| o.reference = Some(vec![DVec3::ZERO; 16]));
+        assert!(reference.check(&sheet).is_ok());
+        let err = run(&stand, "stand", &reference, &mut Silent).unwrap_err().to_string();
+        assert!(err.contains("--reference applies to sheet scenes only"), "{err}");
+        // The standard sheet steps by symplectic Euler: no linear solver, no ρ∞.
+        let solver = with(|o| {
+            o.solve.linear_solver =
+                Some(LinearSolver::ConjugateGradient { tolerance: 1e-3, max_iterations: 10 })
+        });
+        let err = run(&sheet, "sheet", &solver, &mut Silent).unwrap_err().to_string();
+        assert!(err.contains("--linear-solver applies to the implicit integrators only"), "{err}");
+        let rho = with(|o| o.solve.rho_inf = Some(0.3));
+        let err = rho.check(&sheet).unwrap_err().to_string();
+        assert!(err.contains("apply to generalized-alpha only"), "{err}");
+        let Scene::Sheet(mut alpha) = sheet else { unreachable!() };
+        alpha.integrator = Integrator::GeneralizedAlpha;
+        let alpha = Scene::Sheet(alpha);
+        assert!(rho.check(&alpha).is_ok() && solver.check(&alpha).is_ok());
+    }
 
     #[test]
     fn stability_warnings_say_what_the_step_means_for_the_scene() {
