@@ -4,7 +4,7 @@ use std::time::Instant;
 
 use anima_cloth::StepError;
 use anima_cloth::error::NonFinite;
-use anima_cloth::flex3d::Flex3dWorld;
+use anima_cloth::flex3d::{Diagnostics, Flex3dWorld};
 use anima_geom::obt::{ObtObject, write_obt};
 use anima_geom::{DVec3, obj::write_obj};
 use anima_scene::LoadedFlex3d;
@@ -13,10 +13,8 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::series::FrameSeries;
 use super::{
-    CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
-    stability_warning,
+    ClothFrames, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames, stability_warning,
 };
 use crate::output::write_atomic;
 
@@ -141,23 +139,16 @@ pub fn run(
     let mut frames_done = 0;
     // Every surface's triangles in the world's particle indices, so surfaces crossing one another count.
     let triangles = world.all_triangles();
-    let mut watch = CrossingWatch::default();
-    // A live page sees each frame and may pause the run between frames.
-    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
-    let mut output = OutputClock::default();
-    // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
-    // before the clock starts, and not in the summary's largest.
-    let mut series = opts.out_dir.as_ref().map(|_| {
-        let mut f = FrameSeries::new([
-            ("kinetic energy".to_owned(), "J"),
-            ("self-intersections".to_owned(), "crossing pairs"),
-            ("max speed".to_owned(), "m/s"),
-        ]);
-        let crossings = anima_geom::count_self_intersections_within(world.positions(), &triangles, None);
-        let d = world.diagnostics();
-        f.push(world.time(), &[Some(d.kinetic_energy), crossings.ok().map(|n| n as f64), Some(d.max_speed)]);
-        f
-    });
+    let names = [
+        ("kinetic energy".to_owned(), "J"),
+        ("self-intersections".to_owned(), "crossing pairs"),
+        ("max speed".to_owned(), "m/s"),
+    ];
+    let d = world.diagnostics();
+    let mut per_frame =
+        ClothFrames::new(opts, names, world.time(), world.positions(), &triangles, &mut |c| {
+            frame_values(&d, c)
+        });
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target as u64, progress) {
@@ -165,7 +156,7 @@ pub fn run(
             break;
         }
         crate::interrupt::check()?;
-        output.time(|| -> Result<()> {
+        per_frame.output.time(|| -> Result<()> {
             write_frame(opts, &world, k)?;
             if let Some(e) = &mut export {
                 e.deforming_frame(k, world.time(), |s| world.surface_positions(s));
@@ -179,14 +170,8 @@ pub fn run(
             }
             Ok(())
         })?;
-        if let Some(l) = &mut live {
-            l.cloth_frame(k, world.time(), world.positions(), &triangles)?;
-        }
-        let crossings = watch.look(world.positions(), &triangles);
         let d = world.diagnostics();
-        if let Some(f) = &mut series {
-            f.push(world.time(), &[Some(d.kinetic_energy), crossings.map(|n| n as f64), Some(d.max_speed)]);
-        }
+        per_frame.frame(k, world.time(), world.positions(), &triangles, &mut |c| frame_values(&d, c))?;
         frame_stats.push(FrameStats {
             frame: k,
             time: world.time(),
@@ -197,14 +182,15 @@ pub fn run(
         });
         frames_done = k;
     }
-    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
-    let output_seconds = output.seconds();
+    let wall_seconds = start.elapsed().as_secs_f64() - per_frame.watch.seconds();
+    let output_seconds = per_frame.output.seconds();
     progress.end();
+    let watch = &mut per_frame.watch;
     watch.look(world.positions(), &triangles);
     let d = world.diagnostics();
     let counts = world.collision_counts();
     let steps = world.steps() as usize;
-    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
+    super::closing_warnings(export, opts, Some(watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "flex3d",
@@ -243,10 +229,14 @@ pub fn run(
     if let Some(dir) = opts.picture_dir() {
         crate::picture::write_pictures(dir, &world, &snapshots)?;
     }
-    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
-        f.write(dir)?;
-    }
+    per_frame.write_series(opts)?;
     Ok((summary, world))
+}
+
+/// A frame's values in the order of the run's series: kinetic energy, crossings (`None`: the count was
+/// abandoned), the largest speed.
+fn frame_values(d: &Diagnostics, crossings: Option<usize>) -> Vec<Option<f64>> {
+    vec![Some(d.kinetic_energy), crossings.map(|n| n as f64), Some(d.max_speed)]
 }
 
 fn step_to(world: &mut Flex3dWorld, target: u64, progress: &mut dyn Progress) -> Result<(), StepError> {

@@ -23,6 +23,7 @@ use serde::Serialize;
 
 pub use export::Export;
 pub(crate) use kind::kind;
+use series::FrameSeries;
 
 use crate::output::write_atomic;
 
@@ -241,6 +242,70 @@ impl CrossingWatch {
     /// Seconds spent counting.
     pub fn seconds(&self) -> f64 {
         self.spent.as_secs_f64()
+    }
+}
+
+/// What a cloth run keeps at every frame besides its frame files, the same for every cloth kind: the
+/// crossing pairs counted (within the count's budget, [`CrossingWatch`]), a row of `series.json` (when
+/// the run writes output) and the frame shown to a live page; and the time spent on output.
+pub(crate) struct ClothFrames {
+    pub watch: CrossingWatch,
+    pub output: OutputClock,
+    live: Option<crate::live::LiveRun>,
+    series: Option<FrameSeries>,
+}
+
+/// A frame's values for the series, from its crossing count (`None`: abandoned for its budget).
+pub(crate) type FrameValues<'a> = &'a mut dyn FnMut(Option<usize>) -> Vec<Option<f64>>;
+
+impl ClothFrames {
+    /// The series `names` (with frame 0's row, `values` of the state at `t0`: its crossings are
+    /// counted here, before the run's clock starts, and not in the summary's largest), and the live page
+    /// of `opts`.
+    pub fn new(
+        opts: &RunOptions,
+        names: impl IntoIterator<Item = (String, &'static str)>,
+        t0: f64,
+        x: &[DVec3],
+        triangles: &[[u32; 3]],
+        values: FrameValues<'_>,
+    ) -> Self {
+        let series = opts.out_dir.as_ref().map(|_| {
+            let mut f = FrameSeries::new(names);
+            let crossings = anima_geom::count_self_intersections_within(x, triangles, None);
+            f.push(t0, &values(crossings.ok()));
+            f
+        });
+        let live = opts.live.as_ref().map(crate::live::LiveRun::new);
+        Self { watch: CrossingWatch::default(), output: OutputClock::default(), live, series }
+    }
+
+    /// Frame `k` at time `t`, written: its crossings counted, its row of the series, and the live page
+    /// shown it (which may pause the run here).
+    pub fn frame(
+        &mut self,
+        k: usize,
+        t: f64,
+        x: &[DVec3],
+        triangles: &[[u32; 3]],
+        values: FrameValues<'_>,
+    ) -> Result<()> {
+        let crossings = self.watch.look(x, triangles);
+        if let Some(f) = &mut self.series {
+            f.push(t, &values(crossings));
+        }
+        if let Some(l) = &mut self.live {
+            l.cloth_frame(k, t, x, triangles)?;
+        }
+        Ok(())
+    }
+
+    /// Writes `series.json` into the output folder, when the run writes output.
+    pub fn write_series(&self, opts: &RunOptions) -> Result<()> {
+        match (&opts.out_dir, &self.series) {
+            (Some(dir), Some(f)) => f.write(dir),
+            _ => Ok(()),
+        }
     }
 }
 

@@ -17,10 +17,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::series::FrameSeries;
-use super::{
-    CrossingWatch, Detail, OutputClock, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames,
-};
+use super::{ClothFrames, Detail, Progress, RunOptions, SelfCollisionReport, Summary, sheet_frames};
 use crate::drape::{Ended, object_meshes, run_drape};
 use crate::output::write_atomic;
 
@@ -85,24 +82,15 @@ pub fn run(
     let mut next_frame = 1;
     let mut kept: Vec<Kept> = Vec::new();
     let mut write_error = None;
-    let mut watch = CrossingWatch::default();
-    // A live page sees each frame and may pause the run between frames.
-    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
-    let mut output = OutputClock::default();
-    // Frame by frame (series.json, when the run writes output); frame 0's crossings are counted here,
-    // before the clock starts, and not in the summary's largest.
-    let mut series = opts.out_dir.as_ref().map(|_| {
-        let mut f = FrameSeries::new([
-            ("kinetic energy".to_owned(), "J"),
-            ("self-intersections".to_owned(), "crossing pairs"),
-            ("vertices".to_owned(), "count"),
-            ("contact responses (total)".to_owned(), "count"),
-        ]);
-        let c = cloth.cloth();
-        let crossings = anima_geom::count_self_intersections_within(c.positions(), c.triangles(), None);
-        f.push(0.0, &frame_values(c, crossings.ok()));
-        f
-    });
+    let names = [
+        ("kinetic energy".to_owned(), "J"),
+        ("self-intersections".to_owned(), "crossing pairs"),
+        ("vertices".to_owned(), "count"),
+        ("contact responses (total)".to_owned(), "count"),
+    ];
+    let c = cloth.cloth();
+    let mut per_frame =
+        ClothFrames::new(opts, names, 0.0, c.positions(), c.triangles(), &mut |n| frame_values(c, n));
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
     let mut too_long = false;
@@ -120,7 +108,7 @@ pub fn run(
         max_dt = max_dt.max(report.dt);
         let t = c.cloth().time();
         while next_frame <= n_frames && t >= frame_time(next_frame) - 1e-12 {
-            let written = output.time(|| {
+            let written = per_frame.output.time(|| {
                 write_frame(opts, c, next_frame)?;
                 if let Some(e) = &mut export {
                     // The frame's own time: the state is that of the first step to reach it, as in the
@@ -132,41 +120,33 @@ pub fn run(
                 }
                 Ok(())
             });
-            if let Err(e) = written {
+            let (x, triangles) = (c.cloth().positions(), c.cloth().triangles());
+            let done = written.and_then(|()| {
+                per_frame.frame(next_frame, frame_time(next_frame), x, triangles, &mut |n| {
+                    frame_values(c.cloth(), n)
+                })
+            });
+            if let Err(e) = done {
                 write_error = Some(e);
                 return ControlFlow::Break(());
-            }
-            if let Some(l) = &mut live
-                && let Err(e) = l.cloth_frame(
-                    next_frame,
-                    frame_time(next_frame),
-                    c.cloth().positions(),
-                    c.cloth().triangles(),
-                )
-            {
-                write_error = Some(e.into());
-                return ControlFlow::Break(());
-            }
-            let crossings = watch.look(c.cloth().positions(), c.cloth().triangles());
-            if let Some(f) = &mut series {
-                f.push(frame_time(next_frame), &frame_values(c.cloth(), crossings));
             }
             progress.advance((t * 1e3) as u64);
             next_frame += 1;
         }
         ControlFlow::Continue(())
     });
-    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
-    let output_seconds = output.seconds();
+    let wall_seconds = start.elapsed().as_secs_f64() - per_frame.watch.seconds();
+    let output_seconds = per_frame.output.seconds();
     progress.end();
     if let Some(e) = write_error {
         return Err(e);
     }
     let mut warnings = Vec::new();
     let c = cloth.cloth();
+    let watch = &mut per_frame.watch;
     watch.look(c.positions(), c.triangles());
     let stats = cloth.stats();
-    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
+    super::closing_warnings(export, opts, Some(watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "oliveira",
@@ -212,16 +192,14 @@ pub fn run(
     if let Some(dir) = opts.picture_dir() {
         write_pictures(dir, &cloth, &kept)?;
     }
-    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
-        f.write(dir)?;
-    }
+    per_frame.write_series(opts)?;
     Ok(summary)
 }
 
 /// A frame's values in the order of the run's series: kinetic energy, crossings (`None`: the count was
 /// abandoned), vertices, contact responses so far.
-fn frame_values(c: &OliveiraCloth, crossings: Option<usize>) -> [Option<f64>; 4] {
-    [
+fn frame_values(c: &OliveiraCloth, crossings: Option<usize>) -> Vec<Option<f64>> {
+    vec![
         Some(c.kinetic_energy()),
         crossings.map(|n| n as f64),
         Some(c.positions().len() as f64),

@@ -18,10 +18,8 @@ use anyhow::{Result, bail};
 use serde::Serialize;
 
 use super::export::GltfExport;
-use super::series::FrameSeries;
-use super::{
-    CrossingWatch, Detail, OutputClock, Progress, RunOptions, Summary, sheet_frames, stability_warning,
-};
+
+use super::{ClothFrames, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 use crate::simulation::Deformable;
 
@@ -115,25 +113,18 @@ pub fn run(
         }
         None => None,
     };
-    // Frame by frame, what the summary reports at the end (series.json, when the run writes output);
-    // frame 0's crossings are counted here, before the clock starts, and not in the summary's largest.
-    let mut series = opts.out_dir.as_ref().map(|_| {
-        let mut f = FrameSeries::new([
-            ("kinetic energy".to_owned(), "J"),
-            ("self-intersections".to_owned(), "crossing pairs"),
-        ]);
-        let crossings = anima_geom::count_self_intersections_within(sim.positions(), &triangles, None);
-        f.push(0.0, &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.ok().map(|c| c as f64)]);
-        f
-    });
+    // Frame by frame, what the summary reports at the end (series.json, when the run writes output).
+    let names = [("kinetic energy".to_owned(), "J"), ("self-intersections".to_owned(), "crossing pairs")];
+    let mass = scene.sheet.total_mass;
+    let values = |sim: &Cloth, crossings: Option<usize>| {
+        vec![Some(sim.kinetic_energy(mass)), crossings.map(|c| c as f64)]
+    };
+    let mut per_frame =
+        ClothFrames::new(opts, names, 0.0, sim.positions(), &triangles, &mut |c| values(&sim, c));
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
     let mut diverged = false;
-    let mut watch = CrossingWatch::default();
-    // A live page sees each frame and may pause the run between frames.
-    let mut live = opts.live.as_ref().map(crate::live::LiveRun::new);
-    let mut output = OutputClock::default();
     let mut frames = 0;
     // What the adaptive methods did (the model's own clock counts fixed steps only).
     let mut adaptive_steps: Option<(u64, f64)> = None;
@@ -176,24 +167,13 @@ pub fn run(
                 break;
             }
             frames = k;
-            let crossings = watch.look(sim.positions(), &triangles);
-            if let Some(f) = &mut series {
-                output.time(|| {
-                    f.push(
-                        t,
-                        &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.map(|c| c as f64)],
-                    )
-                });
-            }
             progress.advance(((t / scene.duration_s) * n_steps as f64) as u64);
             crate::interrupt::check()?;
-            output.time(|| {
+            per_frame.output.time(|| {
                 let frame = Frame { k, t, x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
-            if let Some(l) = &mut live {
-                l.cloth_frame(k, t, sim.positions(), &triangles)?;
-            }
+            per_frame.frame(k, t, sim.positions(), &triangles, &mut |c| values(&sim, c))?;
             if taken > budget && k < n_frames {
                 error = Some(format!(
                     "stopped at t = {t} s after {taken} adaptive steps, {ADAPTIVE_STEP_BUDGET} times the {n_steps} steps \
@@ -219,34 +199,22 @@ pub fn run(
                 break;
             }
             frames = k;
-            let crossings = watch.look(sim.positions(), &triangles);
-            if let Some(f) = &mut series {
-                let t = sim.time();
-                output.time(|| {
-                    f.push(
-                        t,
-                        &[Some(sim.kinetic_energy(scene.sheet.total_mass)), crossings.map(|c| c as f64)],
-                    )
-                });
-            }
             progress.advance(sim.steps());
             crate::interrupt::check()?;
-            output.time(|| {
+            per_frame.output.time(|| {
                 let frame = Frame { k, t: sim.time(), x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
-            if let Some(l) = &mut live {
-                l.cloth_frame(k, sim.time(), sim.positions(), &triangles)?;
-            }
+            per_frame.frame(k, sim.time(), sim.positions(), &triangles, &mut |c| values(&sim, c))?;
         }
     }
-    let wall_seconds = start.elapsed().as_secs_f64() - watch.seconds();
-    let output_seconds = output.seconds();
+    let wall_seconds = start.elapsed().as_secs_f64() - per_frame.watch.seconds();
+    let output_seconds = per_frame.output.seconds();
     progress.end();
     let x = sim.positions();
-    watch.look(x, &triangles);
+    per_frame.watch.look(x, &triangles);
     let (steps, simulated_seconds) = adaptive_steps.unwrap_or((sim.steps(), sim.time()));
-    super::closing_warnings(export, opts, Some(&watch), progress, &mut warnings)?;
+    super::closing_warnings(export, opts, Some(&per_frame.watch), progress, &mut warnings)?;
     let summary = Summary {
         scene: label.to_owned(),
         kind: "sheet",
@@ -258,7 +226,7 @@ pub fn run(
         all_finite: !diverged && x.iter().chain(sim.velocities()).all(|p| p.is_finite()),
         error,
         warnings,
-        self_intersections: Some(watch.largest),
+        self_intersections: Some(per_frame.watch.largest),
         detail: Detail::Sheet(SheetDetail {
             model: match scene.model {
                 SheetModel::Springs => "springs",
@@ -284,9 +252,7 @@ pub fn run(
     if let Some(dir) = &opts.out_dir {
         write_atomic(&dir.join("final.obj"), |w| Ok(write_obj(w, "sheet", x, &triangles)?))?;
     }
-    if let (Some(dir), Some(f)) = (&opts.out_dir, &series) {
-        f.write(dir)?;
-    }
+    per_frame.write_series(opts)?;
     if let Some(dir) = opts.picture_dir() {
         write_pictures(dir, x, sim.time(), &snapshots, &triangles)?;
     }
