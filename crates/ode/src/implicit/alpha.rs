@@ -133,12 +133,13 @@ pub const DEFAULT_NEWTON_CONTRACTION: f64 = 0.3;
 /// default and is not one, because the iterations are needed as Newton iterations, not for the
 /// regimes as such: with none the 257² Bunny drape stretched a spring to 11 times its length, its
 /// self-collision response then took seconds a step, and it had not reached 1.4 s of its 3 s after 8
-/// minutes (with two it ends in 2 minutes, no spring past twice its length); the theses' 17 × 17 Bunny
-/// drape at 1/60 s erred 69.9 mm against its converged model with none, 31.6 mm with two and 35.3 mm
-/// with five planned iterations and none extra (`docs/reproduction/oliveira-implicit.md`). On the 65²
-/// drapes the errors were alike (Bunny 15.2–17.6 mm with none, 12.6–17.2 mm with two, band 7.0 mm;
-/// sphere 22.5–23.0 against 19.3–19.6 mm, band 1.7 mm), and one extra iteration erred more than
-/// either. What would make the cheaper step safe is a test of Newton's convergence that contacts do
+/// minutes (with two it ends in 2 minutes, no spring past twice its length). The theses' 17 × 17 Bunny
+/// drape at 1/60 s errs 31.6 mm against its converged model with two (`docs/reproduction/oliveira-implicit.md`,
+/// whose runs take the defaults). Probe runs of that drape when the default was chosen erred 69.9 mm
+/// with none, and 35.3 mm with five planned iterations and none extra. On the 65² drapes the errors
+/// were alike (`scale_probe` with `REGIME=0` and the default: Bunny 15.2–17.6 mm with none, 12.6–17.2
+/// mm with two, band 7.0 mm; sphere 22.5–23.0 against 19.3–19.6 mm, band 1.7 mm), and one extra
+/// iteration erred more than either. What would make the cheaper step safe is a test of Newton's convergence that contacts do
 /// not upset, which the contraction test ([`DEFAULT_NEWTON_CONTRACTION`]) is not.
 ///
 /// Why no such test was found (65² drapes, 3 s, `scale_probe`). The Newton updates there do not

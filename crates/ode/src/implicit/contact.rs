@@ -17,7 +17,8 @@
 //! unrelated to when it hit: a free particle hitting two thirds into a 0.05 s step with e = 0.5 ended
 //! 84 mm up where its bounce leaves it 25 mm up (`tests/contact_bounce.rs`). On Oliveira's drapes at
 //! 1/60–1/240 s the bounce in place lowered the error against the converged model in eight of nine
-//! cases (the sphere at 1/60 s, when this was introduced: 23.4 to 16.4 mm, each against its own converged run; see `docs/reproduction/oliveira-implicit.md`). A
+//! cases when this was introduced (on the sphere at 1/60 s from 23.4 to 16.4 mm, each against its own
+//! converged run). `docs/reproduction/oliveira-implicit.md` holds the errors as they are now. A
 //! coordinate already in contact that approaches (it rests, or it chatters) leaves with at least
 //! −e (n·v₀) as before.
 //!
