@@ -1,5 +1,7 @@
 //! One drape of `cargo xtask bench --scale`, timed and profiled: `OBSTACLE` = bunny | sphere (bunny), or
-//! `sheet` for the standard sheet of V × V particles (`T` seconds, one run),
+//! `sheet` for the standard sheet of V × V particles (`T` seconds, one run), `MIN_EDGE` (m) to remesh
+//! the drape after every step by the sizing field down to edges that short (V = 17 or 33 as a start:
+//! the shipped drape files' sizes, or a `drape-*-V.ron` of your own),
 //! `V` = 65 | 129 | 257 (65), `T` = simulated seconds (3; a 3 s run of a size whose converged references
 //! are cached also prints its error), `THREADS` (every core), `GRAVITY` (a factor on gravity: 1),
 //! `REGIME` (Newton iterations for contacts that change regime; the stepper's default), `REFERENCES=1`
@@ -19,9 +21,13 @@ fn main() -> anyhow::Result<()> {
     let regime: Option<usize> = var("REGIME").and_then(|s| s.parse().ok());
     let threads: usize = var("THREADS").and_then(|s| s.parse().ok()).unwrap_or(0);
     let references = var("REFERENCES").is_some_and(|s| s == "1");
+    let min_edge: Option<f64> = var("MIN_EDGE").and_then(|s| s.parse().ok());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let report = pool.install(|| match obstacle.as_str() {
         "sheet" => anima_lab::scale::sheet_probe(v, t),
+        _ if min_edge.is_some() => {
+            anima_lab::scale::adaptive_probe(&Repo::here(), &obstacle, v, t, min_edge.unwrap_or_default())
+        }
         _ => anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime, references),
     })?;
     println!("{report}");

@@ -831,6 +831,64 @@ pub fn probe(
     Ok(out)
 }
 
+/// The drape `obstacle` at `v`² for `seconds`, remeshed after every step by the sizing field down to
+/// edges of `min_edge_m` (`MIN_EDGE` of the `scale_probe` example): the step's cost and where it went
+/// (the remeshing in what the solver's profile and the self-collision response leave), the mesh at the
+/// end, and the crossing pairs and particles inside an object
+/// after every step.
+pub fn adaptive_probe(
+    repo: &Repo,
+    obstacle: &str,
+    v: usize,
+    seconds: f64,
+    min_edge_m: f64,
+) -> Result<String> {
+    let mut loaded = drape_scene(repo, obstacle, v, 1.0, DT)?;
+    loaded.remesher = Some(anima_scene::oliveira::Remesher::SizingField {
+        min_edge_m,
+        interval_s: DT,
+        refuse_crossings: true,
+    });
+    let mut cloth = loaded.build()?;
+    cloth.stepper_mut().set_profiling(true);
+    let mut cloth = loaded.with_remesher(cloth);
+    let n_steps = (seconds / DT).round().max(1.0) as u64;
+    let (mut stepping, mut inside, mut crossings) = (0.0, 0, 0);
+    for k in 0..n_steps {
+        let started = Instant::now();
+        cloth.step().with_context(|| format!("step {k}"))?;
+        stepping += started.elapsed().as_secs_f64();
+        let c = cloth.cloth();
+        inside = inside.max(c.penetrations().len());
+        crossings = crossings.max(count_self_intersections(c.positions(), c.triangles()));
+    }
+    let c = cloth.cloth();
+    let self_s = c.self_collision_stats().unwrap_or_default().times.total().as_secs_f64();
+    let p = cloth.stepper_mut().profile().unwrap_or_default();
+    let ms = |s: f64| 1e3 * s / n_steps as f64;
+    // What the profile and the response do not time: the remeshing and what a new mesh rebuilds.
+    let rest = stepping - p.assembly_s - p.setup_s - p.solve_s - p.contact_s - self_s;
+    let c = cloth.cloth();
+    Ok(format!(
+        "{obstacle} {v}² remeshed to edges of {min_edge_m} m, {seconds} s on {} threads: {:.1} ms per step \
+         (assembly {:.1}, set-up {:.1}, solves {:.1}, contact {:.1}, self-collision {:.1}, the rest, remeshing included, {:.1}); \
+         Newton {:.2}, CG {:.1} per step; {} particles and {} faces at the end; most inside {inside}, most \
+         crossings {crossings} (after every step)",
+        anima_ode::parallel::threads(),
+        ms(stepping),
+        ms(p.assembly_s),
+        ms(p.setup_s),
+        ms(p.solve_s),
+        ms(p.contact_s),
+        ms(self_s),
+        ms(rest),
+        p.newton_iterations as f64 / n_steps as f64,
+        p.solver_iterations as f64 / n_steps as f64,
+        c.positions().len(),
+        c.triangles().len(),
+    ))
+}
+
 /// The standard sheet N × N for `seconds` at 1/60 s by generalised-α on the pool it runs in, with where
 /// a step's time went (`OBSTACLE=sheet V=N` of the `scale_probe` example).
 pub fn sheet_probe(n: usize, seconds: f64) -> Result<String> {

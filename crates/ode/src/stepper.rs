@@ -188,7 +188,8 @@ impl<C: Coord> Stepper<C> {
     }
 
     /// A fresh stepper for `n_coords` coordinates (after a topology change) with this one's integrator,
-    /// linear solver, Newton iterations, ρ∞, friction model and profiling; the history starts empty
+    /// linear solver, Newton iterations, ρ∞, friction model and profile (its sums so far kept); the
+    /// history starts empty
     /// (generalised-α then takes its acceleration from M⁻¹ f: see [`Stepper::zero_acceleration`] for a
     /// state that rests on contacts).
     pub fn resized(&self, n_coords: usize) -> Self {
@@ -203,7 +204,8 @@ impl<C: Coord> Stepper<C> {
             if let (Some(a), Some(b)) = (&from.alpha, &mut to.alpha) {
                 b.params = a.params;
             }
-            to.profile = from.profile.map(|_| SolveProfile::default());
+            // The profile so far goes on, so that a remeshed run is timed whole.
+            to.profile = from.profile;
         }
         s
     }

@@ -458,3 +458,19 @@ fn generalized_alpha_stops_newton_early_only_by_default() {
     assert!((2.0..3.0).contains(&default), "{default} Newton iterations per step by default");
     assert_eq!(newton_per_step(Some(3)), 3.0);
 }
+
+/// A stepper resized for a new mesh keeps its profile's sums, so that a remeshed run is timed whole.
+#[test]
+fn a_resized_stepper_keeps_its_profile() {
+    let (n, h) = (12, 1.0 / 60.0);
+    let mut chain = Chain::new(n);
+    let mut stepper = Stepper::new(Integrator::GeneralizedAlpha, n);
+    stepper.set_profiling(true);
+    let (now, mut next) = (start(n), start(n));
+    stepper.step(&mut chain, 0.0, h, &now, &mut next).expect("step");
+    let before = stepper.profile().expect("profiled");
+    assert_eq!(before.steps, 1);
+    let resized = stepper.resized(n + 3);
+    let after = resized.profile().expect("still profiled");
+    assert_eq!((after.steps, after.newton_iterations), (before.steps, before.newton_iterations));
+}
