@@ -748,6 +748,18 @@ fn stability_section(sheets: &[usize]) -> Result<String> {
     Ok(out)
 }
 
+/// A profile's phases in ms per step over `steps` steps (the probes' wording).
+fn phases(p: &SolveProfile, steps: f64) -> String {
+    let ms = |s: f64| 1e3 * s / steps;
+    format!(
+        "assembly {:.1}, set-up {:.1}, solves {:.1}, contact {:.1}",
+        ms(p.assembly_s),
+        ms(p.setup_s),
+        ms(p.solve_s),
+        ms(p.contact_s)
+    )
+}
+
 /// A quick look at one drape for whoever tunes its step (`cargo run --release -p anima-lab --example
 /// scale_probe`): `seconds` of the drape `obstacle` at `v`² (gravity × `gravity`, `regime` Newton
 /// iterations for contacts that change regime when given) on the pool it runs in, with where the time
@@ -788,15 +800,12 @@ pub fn probe(
     let times = stats.times;
     let self_s = times.total().as_secs_f64();
     let mut out = format!(
-        "{obstacle} {v}², {seconds} s on {} threads: {:.1} ms per step (assembly {:.1}, set-up {:.1}, solves {:.1}, \
-         contact {:.1}, self-collision {:.1}: broad phase {:.1}, proximity {:.1}, impacts {:.1}, zones {:.1}); Newton {:.2}, CG {:.1}, coarse set-ups {:.2} per step; most inside {inside}, \
+        "{obstacle} {v}², {seconds} s on {} threads: {:.1} ms per step ({}, \
+         self-collision {:.1}: broad phase {:.1}, proximity {:.1}, impacts {:.1}, zones {:.1}); Newton {:.2}, CG {:.1}, coarse set-ups {:.2} per step; most inside {inside}, \
          most crossings {crossings} (every 10th step), fastest {fastest:.2} m/s; self-collision repulsions {}, impacts {}; wall {:.1} s",
         anima_ode::parallel::threads(),
         ms(stepping),
-        ms(p.assembly_s),
-        ms(p.setup_s),
-        ms(p.solve_s),
-        ms(p.contact_s),
+        phases(&p, steps),
         ms(self_s),
         ms(times.broad_phase.as_secs_f64()),
         ms(times.proximity.as_secs_f64()),
@@ -871,15 +880,12 @@ pub fn adaptive_probe(
     let c = cloth.cloth();
     Ok(format!(
         "{obstacle} {v}² remeshed to edges of {min_edge_m} m, {seconds} s on {} threads: {:.1} ms per step \
-         (assembly {:.1}, set-up {:.1}, solves {:.1}, contact {:.1}, self-collision {:.1}, the rest, remeshing included, {:.1}); \
+         ({}, self-collision {:.1}, the rest, remeshing included, {:.1}); \
          Newton {:.2}, CG {:.1} per step; {} particles and {} faces at the end; most inside {inside}, most \
          crossings {crossings} (after every step)",
         anima_ode::parallel::threads(),
         ms(stepping),
-        ms(p.assembly_s),
-        ms(p.setup_s),
-        ms(p.solve_s),
-        ms(p.contact_s),
+        phases(&p, n_steps as f64),
         ms(self_s),
         ms(rest),
         p.newton_iterations as f64 / n_steps as f64,
