@@ -344,6 +344,23 @@ impl Solid {
         }
     }
 
+    /// Whether `p` is inside or closer than `d` to the surface: what [`Solid::proximity`] answers
+    /// (`inside || distance < d`), without its query where [`Solid::surely_beyond`] rules it out.
+    pub fn near(&self, p: DVec3, d: f64) -> bool {
+        if self.surely_beyond(p, d) {
+            return false;
+        }
+        let prox = self.proximity(p);
+        prox.inside || prox.distance < d
+    }
+
+    /// Whether `p` is certainly outside and farther than `d` from the surface, by a test that costs no
+    /// query: it lies more than `d` outside a mesh's bounding box. `false` says nothing (every point of
+    /// an analytic solid, whose query is cheap anyway).
+    pub fn surely_beyond(&self, p: DVec3, d: f64) -> bool {
+        matches!(self, Solid::Mesh(x) if x.aabb.distance_to(p) > d.max(0.0))
+    }
+
     /// A lower bound on the distance from `p` to the surface, cheaper than [`Solid::proximity`] far
     /// from a mesh (the distance to its bounding box).
     pub fn clearance(&self, p: DVec3) -> f64 {
@@ -551,6 +568,26 @@ mod tests {
                 assert!((p.distance(prox.point) - prox.distance).abs() < 1e-12);
             }
         }
+    }
+
+    /// `near` answers what `proximity` does, for every solid, at distances across the bounding box's
+    /// margin (points are spread in and around the solids, and far off them).
+    #[test]
+    fn near_answers_what_proximity_does() {
+        let mut far = 0;
+        for solid in solids() {
+            for p in points(300).into_iter().chain(points(300).into_iter().map(|p| p * 3.0)) {
+                for d in [0.0, 0.01, 0.1, 0.5] {
+                    let prox = solid.proximity(p);
+                    assert_eq!(solid.near(p, d), prox.inside || prox.distance < d, "{p} at {d}");
+                    assert!(!solid.surely_beyond(p, d) || (!prox.inside && prox.distance > d), "{p} at {d}");
+                    if let Solid::Mesh(m) = &solid {
+                        far += usize::from(m.aabb.distance_to(p) > d);
+                    }
+                }
+            }
+        }
+        assert!(far > 100, "only {far} points took the bounding box's answer");
     }
 
     #[test]

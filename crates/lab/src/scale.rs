@@ -842,8 +842,8 @@ pub fn probe(
 
 /// The drape `obstacle` at `v`² for `seconds`, remeshed after every step by the sizing field down to
 /// edges of `min_edge_m` (`MIN_EDGE` of the `scale_probe` example): the step's cost and where it went
-/// (the remeshing in what the solver's profile and the self-collision response leave), the mesh at the
-/// end, and the crossing pairs and particles inside an object
+/// (the remeshing passes with the cloth rebuilt on each new mesh, and what nothing times), the mesh at
+/// the end, and the crossing pairs and particles inside an object
 /// after every step.
 pub fn adaptive_probe(
     repo: &Repo,
@@ -875,18 +875,20 @@ pub fn adaptive_probe(
     let self_s = c.self_collision_stats().unwrap_or_default().times.total().as_secs_f64();
     let p = cloth.stepper_mut().profile().unwrap_or_default();
     let ms = |s: f64| 1e3 * s / n_steps as f64;
-    // What the profile and the response do not time: the remeshing and what a new mesh rebuilds.
-    let rest = stepping - p.assembly_s - p.setup_s - p.solve_s - p.contact_s - self_s;
+    // The passes (the cloth rebuilt on each new mesh included), and what nothing above times.
+    let remeshing = cloth.stats().wall_s;
+    let rest = stepping - p.assembly_s - p.setup_s - p.solve_s - p.contact_s - self_s - remeshing;
     let c = cloth.cloth();
     Ok(format!(
         "{obstacle} {v}² remeshed to edges of {min_edge_m} m, {seconds} s on {} threads: {:.1} ms per step \
-         ({}, self-collision {:.1}, the rest, remeshing included, {:.1}); \
+         ({}, self-collision {:.1}, remeshing {:.1}, the rest {:.1}); \
          Newton {:.2}, CG {:.1} per step; {} particles and {} faces at the end; most inside {inside}, most \
          crossings {crossings} (after every step)",
         anima_ode::parallel::threads(),
         ms(stepping),
         phases(&p, n_steps as f64),
         ms(self_s),
+        ms(remeshing),
         ms(rest),
         p.newton_iterations as f64 / n_steps as f64,
         p.solver_iterations as f64 / n_steps as f64,

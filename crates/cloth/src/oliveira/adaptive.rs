@@ -569,6 +569,8 @@ fn outer_sides(cloth: &OliveiraCloth) -> Vec<f64> {
             let vote: f64 = x
                 .iter()
                 .zip(&normals)
+                // Only particles within TOUCHING_M vote: the others are left out before their query.
+                .filter(|(xj, _)| !o.solid.surely_beyond(**xj, TOUCHING_M))
                 .filter_map(|(&xj, &nj)| {
                     let prox = o.solid.proximity(xj);
                     (!prox.inside && prox.distance > 0.0 && prox.distance <= TOUCHING_M)
@@ -950,10 +952,7 @@ fn sizing_pass(
     for f in mesh.live_faces() {
         let c =
             mesh.face_slots()[f as usize].iter().map(|&i| mesh.positions()[i as usize]).sum::<DVec3>() / 3.0;
-        let close = cloth.colliders().iter().any(|o| {
-            let prox = o.solid.proximity(c);
-            prox.inside || prox.distance < p.proximity_distance_m
-        });
+        let close = cloth.colliders().iter().any(|o| o.solid.near(c, p.proximity_distance_m));
         if close {
             extra[f as usize] = near;
         }
