@@ -412,8 +412,8 @@ fn rust_files(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
     }
 }
 
-/// The sentences of the doc comments (`///` and `//!` paragraphs) of a source file, with the line
-/// each starts on.
+/// The sentences of the doc comments (`///` and `//!` paragraphs) of a source file, each with the line
+/// its paragraph starts on.
 fn doc_sentences(source: &str) -> Vec<(usize, String)> {
     let mut out = Vec::new();
     let mut paragraph: Vec<(usize, &str)> = Vec::new();

@@ -457,7 +457,7 @@ fn run_command(args: RunArgs) -> Result<ExitCode> {
     };
     args.overrides().apply(&mut scene)?;
     let opts = args.options()?;
-    // Before the run spends its time, as the outputs below.
+    // Refused before the outputs are looked at (the run checks again, for library callers).
     opts.check(&scene)?;
     let summary_path = args.summary.clone().unwrap_or_else(|| args.out.join("summary.json"));
     // Both outputs are checked before the run spends its time.

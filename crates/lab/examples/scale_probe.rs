@@ -23,11 +23,9 @@ fn main() -> anyhow::Result<()> {
     let references = var("REFERENCES").is_some_and(|s| s == "1");
     let min_edge: Option<f64> = var("MIN_EDGE").and_then(|s| s.parse().ok());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let report = pool.install(|| match obstacle.as_str() {
-        "sheet" => anima_lab::scale::sheet_probe(v, t),
-        _ if min_edge.is_some() => {
-            anima_lab::scale::adaptive_probe(&Repo::here(), &obstacle, v, t, min_edge.unwrap_or_default())
-        }
+    let report = pool.install(|| match (obstacle.as_str(), min_edge) {
+        ("sheet", _) => anima_lab::scale::sheet_probe(v, t),
+        (_, Some(e)) => anima_lab::scale::adaptive_probe(&Repo::here(), &obstacle, v, t, gravity, regime, e),
         _ => anima_lab::scale::probe(&Repo::here(), &obstacle, v, t, gravity, regime, references),
     })?;
     println!("{report}");

@@ -67,12 +67,11 @@ struct SheetRun {
     profile: SolveProfile,
 }
 
-/// The standard sheet N × N, 1 s at 1/60 s by generalised-α.
-fn sheet_run(n: usize) -> Result<SheetRun> {
+/// The standard sheet N × N, `steps` steps at 1/60 s by generalised-α.
+fn sheet_run(n: usize, steps: usize) -> Result<SheetRun> {
     let spec = SheetSpec::standard(n);
     let mut sim = NetworkSim::new(spec.build()?, spec.positions(), Integrator::GeneralizedAlpha, DT)?;
     sim.stepper_mut().set_profiling(true);
-    let steps = 60;
     let started = Instant::now();
     sim.run(steps).with_context(|| format!("the standard sheet N = {n}"))?;
     let seconds = started.elapsed().as_secs_f64();
@@ -108,7 +107,7 @@ fn sheet_costs(sizes: &[usize], cores: usize) -> Result<Vec<CostRow>> {
         for _ in 0..SHEET_REPEATS {
             // Alternated: one core, then every core, so that the machine's load drifts over both alike.
             for (k, threads) in [1, cores].into_iter().enumerate() {
-                runs[k].push(on_threads(threads, || sheet_run(n))??);
+                runs[k].push(on_threads(threads, || sheet_run(n, 60))??);
             }
         }
         for (k, threads) in [1, cores].into_iter().enumerate() {
@@ -840,19 +839,21 @@ pub fn probe(
     Ok(out)
 }
 
-/// The drape `obstacle` at `v`² for `seconds`, remeshed after every step by the sizing field down to
+/// The drape `obstacle` at `v`² for `seconds` (gravity × `gravity`, `regime` Newton iterations for
+/// contacts that change regime when given), remeshed after every step by the sizing field down to
 /// edges of `min_edge_m` (`MIN_EDGE` of the `scale_probe` example): the step's cost and where it went
 /// (the remeshing passes with the cloth rebuilt on each new mesh, and what nothing times), the mesh at
-/// the end, and the crossing pairs and particles inside an object
-/// after every step.
+/// the end, and the crossing pairs and particles inside an object after every step.
 pub fn adaptive_probe(
     repo: &Repo,
     obstacle: &str,
     v: usize,
     seconds: f64,
+    gravity: f64,
+    regime: Option<usize>,
     min_edge_m: f64,
 ) -> Result<String> {
-    let mut loaded = drape_scene(repo, obstacle, v, 1.0, DT)?;
+    let mut loaded = drape_scene(repo, obstacle, v, gravity, DT)?;
     loaded.remesher = Some(anima_scene::oliveira::Remesher::SizingField {
         min_edge_m,
         interval_s: DT,
@@ -860,6 +861,9 @@ pub fn adaptive_probe(
     });
     let mut cloth = loaded.build()?;
     cloth.stepper_mut().set_profiling(true);
+    if let Some(k) = regime {
+        cloth.stepper_mut().set_regime_iterations(k);
+    }
     let mut cloth = loaded.with_remesher(cloth);
     let n_steps = (seconds / DT).round().max(1.0) as u64;
     let (mut stepping, mut inside, mut crossings) = (0.0, 0, 0);
@@ -871,8 +875,7 @@ pub fn adaptive_probe(
         inside = inside.max(c.penetrations().len());
         crossings = crossings.max(count_self_intersections(c.positions(), c.triangles()));
     }
-    let c = cloth.cloth();
-    let self_s = c.self_collision_stats().unwrap_or_default().times.total().as_secs_f64();
+    let self_s = cloth.cloth().self_collision_stats().unwrap_or_default().times.total().as_secs_f64();
     let p = cloth.stepper_mut().profile().unwrap_or_default();
     let ms = |s: f64| 1e3 * s / n_steps as f64;
     // The passes (the cloth rebuilt on each new mesh included), and what nothing above times.
@@ -900,14 +903,8 @@ pub fn adaptive_probe(
 /// The standard sheet N × N for `seconds` at 1/60 s by generalised-α on the pool it runs in, with where
 /// a step's time went (`OBSTACLE=sheet V=N` of the `scale_probe` example).
 pub fn sheet_probe(n: usize, seconds: f64) -> Result<String> {
-    let spec = SheetSpec::standard(n);
-    let mut sim = NetworkSim::new(spec.build()?, spec.positions(), Integrator::GeneralizedAlpha, DT)?;
-    sim.stepper_mut().set_profiling(true);
     let steps = (seconds / DT).round().max(1.0) as usize;
-    let started = Instant::now();
-    sim.run(steps).with_context(|| format!("the standard sheet N = {n}"))?;
-    let wall = started.elapsed().as_secs_f64();
-    let p = sim.stepper_mut().profile().unwrap_or_default();
+    let SheetRun { seconds: wall, profile: p, .. } = sheet_run(n, steps)?;
     let per = |s: f64| 1e3 * s / steps as f64;
     Ok(format!(
         "standard sheet {n}², {seconds} s on {} threads: {:.2} ms per step, {:.3} µs per particle-step \

@@ -189,9 +189,8 @@ impl<C: Coord> Stepper<C> {
 
     /// A fresh stepper for `n_coords` coordinates (after a topology change) with this one's integrator,
     /// linear solver, Newton iterations, ρ∞, friction model and profile (its sums so far kept); the
-    /// history starts empty
-    /// (generalised-α then takes its acceleration from M⁻¹ f: see [`Stepper::zero_acceleration`] for a
-    /// state that rests on contacts).
+    /// history starts empty (generalised-α then takes its acceleration from M⁻¹ f: see
+    /// [`Stepper::zero_acceleration`] for a state that rests on contacts).
     pub fn resized(&self, n_coords: usize) -> Self {
         let mut s = Stepper::new(self.integrator, n_coords);
         if let (Some(from), Some(to)) = (&self.implicit, &mut s.implicit) {

@@ -146,9 +146,7 @@ pub fn run(
     ];
     let d = world.diagnostics();
     let mut per_frame =
-        ClothFrames::new(opts, names, world.time(), world.positions(), &triangles, &mut |c| {
-            frame_values(&d, c)
-        });
+        ClothFrames::new(opts, names, world.time(), world.positions(), &triangles, |c| frame_values(&d, c));
     for k in 1..=n_frames + extra {
         let target = if k > n_frames { n_steps } else { scene.frame_step(k).min(n_steps) };
         if let Err(e) = step_to(&mut world, target as u64, progress) {
@@ -171,7 +169,7 @@ pub fn run(
             Ok(())
         })?;
         let d = world.diagnostics();
-        per_frame.frame(k, world.time(), world.positions(), &triangles, &mut |c| frame_values(&d, c))?;
+        per_frame.frame(k, world.time(), world.positions(), &triangles, |c| frame_values(&d, c))?;
         frame_stats.push(FrameStats {
             frame: k,
             time: world.time(),
@@ -235,8 +233,8 @@ pub fn run(
 
 /// A frame's values in the order of the run's series: kinetic energy, crossings (`None`: the count was
 /// abandoned), the largest speed.
-fn frame_values(d: &Diagnostics, crossings: Option<usize>) -> Vec<Option<f64>> {
-    vec![Some(d.kinetic_energy), crossings.map(|n| n as f64), Some(d.max_speed)]
+fn frame_values(d: &Diagnostics, crossings: Option<usize>) -> [Option<f64>; 3] {
+    [Some(d.kinetic_energy), crossings.map(|n| n as f64), Some(d.max_speed)]
 }
 
 fn step_to(world: &mut Flex3dWorld, target: u64, progress: &mut dyn Progress) -> Result<(), StepError> {

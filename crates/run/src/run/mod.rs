@@ -255,20 +255,17 @@ pub(crate) struct ClothFrames {
     series: Option<FrameSeries>,
 }
 
-/// A frame's values for the series, from its crossing count (`None`: abandoned for its budget).
-pub(crate) type FrameValues<'a> = &'a mut dyn FnMut(Option<usize>) -> Vec<Option<f64>>;
-
 impl ClothFrames {
-    /// The series `names` (with frame 0's row, `values` of the state at `t0`: its crossings are
-    /// counted here, before the run's clock starts, and not in the summary's largest), and the live page
-    /// of `opts`.
-    pub fn new(
+    /// The series `names` (with frame 0's row, `values` of the state at `t0` from its crossing count:
+    /// they are counted here, before the run's clock starts, and not in the summary's largest), and the
+    /// live page of `opts`.
+    pub fn new<const N: usize>(
         opts: &RunOptions,
-        names: impl IntoIterator<Item = (String, &'static str)>,
+        names: [(String, &'static str); N],
         t0: f64,
         x: &[DVec3],
         triangles: &[[u32; 3]],
-        values: FrameValues<'_>,
+        values: impl FnOnce(Option<usize>) -> [Option<f64>; N],
     ) -> Self {
         let series = opts.out_dir.as_ref().map(|_| {
             let mut f = FrameSeries::new(names);
@@ -280,15 +277,16 @@ impl ClothFrames {
         Self { watch: CrossingWatch::default(), output: OutputClock::default(), live, series }
     }
 
-    /// Frame `k` at time `t`, written: its crossings counted, its row of the series, and the live page
+    /// Frame `k` at time `t`, written: its crossings counted (`None` when abandoned for the count's
+    /// budget), its row of the series from them (`values`, in the order of the names), and the live page
     /// shown it (which may pause the run here).
-    pub fn frame(
+    pub fn frame<const N: usize>(
         &mut self,
         k: usize,
         t: f64,
         x: &[DVec3],
         triangles: &[[u32; 3]],
-        values: FrameValues<'_>,
+        values: impl FnOnce(Option<usize>) -> [Option<f64>; N],
     ) -> Result<()> {
         let crossings = self.watch.look(x, triangles);
         if let Some(f) = &mut self.series {
@@ -377,8 +375,9 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<()> {
 }
 
 /// Runs a loaded scene of any kind; `label` names it in the summary. The options are checked against
-/// the scene first ([`RunOptions::check`]), and the output folder checked writable, and the frames an earlier run of the same kind left there are removed (with a
-/// warning), so the folder holds this run's frames only; so is an earlier `animation.glb` or
+/// the scene first ([`RunOptions::check`]) and the output folder checked writable; the frames an
+/// earlier run of the same kind left there are removed (with a warning), so the folder holds this
+/// run's frames only; so is an earlier `animation.glb` or
 /// `series.json`, whatever its kind, since it shows an earlier run (this run writes its own at its end
 /// when it exports, or keeps series).
 pub fn run(scene: &Scene, label: &str, opts: &RunOptions, progress: &mut dyn Progress) -> Result<Summary> {

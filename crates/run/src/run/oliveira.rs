@@ -90,7 +90,7 @@ pub fn run(
     ];
     let c = cloth.cloth();
     let mut per_frame =
-        ClothFrames::new(opts, names, 0.0, c.positions(), c.triangles(), &mut |n| frame_values(c, n));
+        ClothFrames::new(opts, names, 0.0, c.positions(), c.triangles(), |n| frame_values(c, n));
     progress.begin((duration * 1e3).ceil() as u64);
     let start = Instant::now();
     let mut too_long = false;
@@ -122,9 +122,8 @@ pub fn run(
             });
             let (x, triangles) = (c.cloth().positions(), c.cloth().triangles());
             let done = written.and_then(|()| {
-                per_frame.frame(next_frame, frame_time(next_frame), x, triangles, &mut |n| {
-                    frame_values(c.cloth(), n)
-                })
+                per_frame
+                    .frame(next_frame, frame_time(next_frame), x, triangles, |n| frame_values(c.cloth(), n))
             });
             if let Err(e) = done {
                 write_error = Some(e);
@@ -198,8 +197,8 @@ pub fn run(
 
 /// A frame's values in the order of the run's series: kinetic energy, crossings (`None`: the count was
 /// abandoned), vertices, contact responses so far.
-fn frame_values(c: &OliveiraCloth, crossings: Option<usize>) -> Vec<Option<f64>> {
-    vec![
+fn frame_values(c: &OliveiraCloth, crossings: Option<usize>) -> [Option<f64>; 4] {
+    [
         Some(c.kinetic_energy()),
         crossings.map(|n| n as f64),
         Some(c.positions().len() as f64),

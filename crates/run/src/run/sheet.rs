@@ -18,7 +18,6 @@ use anyhow::{Result, bail};
 use serde::Serialize;
 
 use super::export::GltfExport;
-
 use super::{ClothFrames, Detail, Progress, RunOptions, Summary, sheet_frames, stability_warning};
 use crate::output::write_atomic;
 use crate::simulation::Deformable;
@@ -116,11 +115,9 @@ pub fn run(
     // Frame by frame, what the summary reports at the end (series.json, when the run writes output).
     let names = [("kinetic energy".to_owned(), "J"), ("self-intersections".to_owned(), "crossing pairs")];
     let mass = scene.sheet.total_mass;
-    let values = |sim: &Cloth, crossings: Option<usize>| {
-        vec![Some(sim.kinetic_energy(mass)), crossings.map(|c| c as f64)]
-    };
-    let mut per_frame =
-        ClothFrames::new(opts, names, 0.0, sim.positions(), &triangles, &mut |c| values(&sim, c));
+    let values =
+        |sim: &Cloth, crossings: Option<usize>| [Some(sim.kinetic_energy(mass)), crossings.map(|c| c as f64)];
+    let mut per_frame = ClothFrames::new(opts, names, 0.0, sim.positions(), &triangles, |c| values(&sim, c));
     progress.begin(n_steps as u64);
     let start = Instant::now();
     let mut error = None;
@@ -173,7 +170,7 @@ pub fn run(
                 let frame = Frame { k, t, x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
-            per_frame.frame(k, t, sim.positions(), &triangles, &mut |c| values(&sim, c))?;
+            per_frame.frame(k, t, sim.positions(), &triangles, |c| values(&sim, c))?;
             if taken > budget && k < n_frames {
                 error = Some(format!(
                     "stopped at t = {t} s after {taken} adaptive steps, {ADAPTIVE_STEP_BUDGET} times the {n_steps} steps \
@@ -205,7 +202,7 @@ pub fn run(
                 let frame = Frame { k, t: sim.time(), x: sim.positions(), triangles: &triangles };
                 frame.write(opts, export.as_mut(), shown.contains(&k).then_some(&mut snapshots))
             })?;
-            per_frame.frame(k, sim.time(), sim.positions(), &triangles, &mut |c| values(&sim, c))?;
+            per_frame.frame(k, sim.time(), sim.positions(), &triangles, |c| values(&sim, c))?;
         }
     }
     let wall_seconds = start.elapsed().as_secs_f64() - per_frame.watch.seconds();
