@@ -21,7 +21,9 @@ fn main() -> anyhow::Result<()> {
     let regime: Option<usize> = var("REGIME").and_then(|s| s.parse().ok());
     let threads: usize = var("THREADS").and_then(|s| s.parse().ok()).unwrap_or(0);
     let references = var("REFERENCES").is_some_and(|s| s == "1");
-    let min_edge: Option<f64> = var("MIN_EDGE").and_then(|s| s.parse().ok());
+    let min_edge: Option<f64> = var("MIN_EDGE")
+        .map(|s| s.parse().map_err(|_| anyhow::anyhow!("MIN_EDGE: expected a length in metres, found `{s}`")))
+        .transpose()?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     let report = pool.install(|| match (obstacle.as_str(), min_edge) {
         ("sheet", _) => anima_lab::scale::sheet_probe(v, t),

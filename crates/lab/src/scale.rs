@@ -854,11 +854,11 @@ pub fn adaptive_probe(
     min_edge_m: f64,
 ) -> Result<String> {
     let mut loaded = drape_scene(repo, obstacle, v, gravity, DT)?;
-    loaded.remesher = Some(anima_scene::oliveira::Remesher::SizingField {
-        min_edge_m,
-        interval_s: DT,
-        refuse_crossings: true,
-    });
+    let remesher =
+        anima_scene::oliveira::Remesher::SizingField { min_edge_m, interval_s: DT, refuse_crossings: true };
+    // Checked here as a scene file's remesher is when it loads: a bad edge is an error, not a static run.
+    remesher.method().map_err(|why| anyhow::anyhow!("MIN_EDGE: {why}"))?;
+    loaded.remesher = Some(remesher);
     let mut cloth = loaded.build()?;
     cloth.stepper_mut().set_profiling(true);
     if let Some(k) = regime {
